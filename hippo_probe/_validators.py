@@ -1,0 +1,110 @@
+"""Shared argument validators: one voice for every error message.
+
+Each helper raises ``ValueError`` (or ``TypeError`` for a wrong type) with a message that
+names the argument, the value received and what was expected, e.g.
+"`bin_size` must be > 0; got -1.0".
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Iterable
+
+import numpy as np
+
+
+def _fmt(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def check_option(name: str, value, allowed: Iterable):
+    """Return ``value`` if it is one of ``allowed``; otherwise raise ValueError."""
+    allowed = tuple(allowed)
+    if value not in allowed:
+        options = ", ".join(repr(a) for a in allowed)
+        raise ValueError(f"`{name}` must be one of {options}; got {_fmt(value)}")
+    return value
+
+
+def check_number(name: str, value, *, low=None, high=None, low_inclusive=False,
+                 high_inclusive=True, integer=False):
+    """Return ``value`` as a Python number after range checks.
+
+    ``low``/``high`` bound the value; inclusivity is set by ``low_inclusive`` and
+    ``high_inclusive``.
+    """
+    kind = numbers.Integral if integer else numbers.Real
+    if isinstance(value, bool) or not isinstance(value, kind):
+        expected = "an integer" if integer else "a real number"
+        raise TypeError(f"`{name}` must be {expected}; got {_fmt(value)}")
+    if not integer and not np.isfinite(value):
+        raise ValueError(f"`{name}` must be finite; got {_fmt(value)}")
+    if low is not None:
+        bad = value < low if low_inclusive else value <= low
+        if bad:
+            op = ">=" if low_inclusive else ">"
+            raise ValueError(f"`{name}` must be {op} {low}; got {_fmt(value)}")
+    if high is not None:
+        bad = value > high if high_inclusive else value >= high
+        if bad:
+            op = "<=" if high_inclusive else "<"
+            raise ValueError(f"`{name}` must be {op} {high}; got {_fmt(value)}")
+    return int(value) if integer else float(value)
+
+
+def check_positive(name: str, value, *, integer=False):
+    """Return ``value`` if it is a finite number > 0."""
+    return check_number(name, value, low=0, integer=integer)
+
+
+def check_nonnegative_int(name: str, value):
+    """Return ``value`` if it is an integer >= 0."""
+    return check_number(name, value, low=0, low_inclusive=True, integer=True)
+
+
+def check_shape(name: str, array, shape: tuple):
+    """Check ``array.shape`` against ``shape`` (``None`` entries match any length)."""
+    array = np.asarray(array)
+    ok = array.ndim == len(shape) and all(
+        s is None or s == a for s, a in zip(shape, array.shape)
+    )
+    if not ok:
+        want = "(" + ", ".join("any" if s is None else str(s) for s in shape) + ")"
+        raise ValueError(f"`{name}` must have shape {want}; got {array.shape}")
+    return array
+
+
+def check_finite(name: str, array, *, allow_nan=False):
+    """Raise ValueError if ``array`` holds inf (or NaN unless ``allow_nan``)."""
+    array = np.asarray(array)
+    if array.dtype.kind in "fc":
+        bad = np.isinf(array) if allow_nan else ~np.isfinite(array)
+        if bad.any():
+            what = "inf" if allow_nan else "NaN or inf"
+            idx = tuple(int(i) for i in np.argwhere(bad)[0])
+            raise ValueError(
+                f"`{name}` must not contain {what}; found {array[idx]!r} at index {idx}"
+            )
+    return array
+
+
+def check_dims(name: str, obj, dims: Iterable[str]):
+    """Check that an xarray object has (at least) the given dims."""
+    missing = [d for d in dims if d not in obj.dims]
+    if missing:
+        raise ValueError(
+            f"`{name}` must have dims {tuple(dims)}; missing {missing} (has {tuple(obj.dims)})"
+        )
+    return obj
+
+
+def check_variables(name: str, ds, variables: Iterable[str], *, why: str = ""):
+    """Check that dataset ``ds`` holds each of ``variables`` (data vars or coords)."""
+    missing = [v for v in variables if v not in ds.variables]
+    if missing:
+        reason = f" ({why})" if why else ""
+        raise ValueError(
+            f"`{name}` must contain {missing}{reason}; it has {sorted(map(str, ds.variables))}"
+        )
+    return ds

@@ -1,0 +1,407 @@
+"""The study's three navigation tasks and their trial batches.
+
+==============  ==========  =====================  ================================
+task            arena       start                  target
+==============  ==========  =====================  ================================
+localization    one fixed   unknown, uniform       position in the arena frame
+                R = 1 m
+generalized     new random  random, uniform        position minus start position
+                every trial
+                R = 0.33 m
+specialized     1 of 100    the centre, known      position in the arena frame,
+                fixed,                             plus the arena's identity (class)
+                R = 0.33 m
+==============  ==========  =====================  ================================
+
+Reproducibility: trial ``i`` of a split is a pure function of ``(task, split, seed, i)``:
+all its random numbers come from ``numpy.random.SeedSequence([seed, task_code,
+split_code, i])``, so it is the same however trials are batched, cached, resumed or
+sharded. Splits differ in ``split_code`` and therefore never share a trial. The fixed
+arenas (the localization arena, the 100 specialized arenas) come from
+:data:`ARENA_SEED` alone, identical on every machine.
+
+Examples
+--------
+>>> batch = make_trials("specialized", n_trials=8, split="validation", seed=0)
+>>> batch.inputs.shape, batch.target.shape, batch.environment.shape
+((500, 8, 9), (500, 8, 2), (8,))
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
+
+import numpy as np
+
+from ._validators import check_nonnegative_int, check_option
+from .world.arena import random_vertices, sample_uniform, wall_distance
+from .world.config import FEATURES, ArenaConfig, WorldConfig
+from .world.motion import simulate_motion
+from .world.sensors import N_NOISE_DRAWS, sense
+
+TASKS = ("localization", "generalized", "specialized")
+SPLITS = ("train", "validation", "test")
+_TASK_CODE = {name: k for k, name in enumerate(TASKS)}
+_SPLIT_CODE = {name: k for k, name in enumerate(SPLITS)}
+
+#: Seed of the fixed arenas (the localization arena and the 100 specialized arenas).
+ARENA_SEED = 1609_09059  # the study's arXiv number: any fixed value would do
+
+
+@dataclass(frozen=True)
+class TaskConfig:
+    """Definition of a task; defaults per task come from :func:`task_config`.
+
+    Attributes
+    ----------
+    name : str
+    world : WorldConfig
+    arenas : {"fixed", "novel"}
+        ``fixed``: ``n_arenas`` arenas drawn once from :data:`ARENA_SEED`; ``novel``: a new
+        random arena every trial.
+    n_arenas : int
+        Number of fixed arenas (1 for localization, 100 for specialized).
+    start : {"uniform", "centre"}
+        Start position: uniform over the arena (at least the touch range from every wall,
+        so no trial begins in contact), or the arena's centre.
+    target : {"arena", "start_relative"}
+        Frame of the regression target.
+    classify : bool
+        Whether the network also reports the arena's identity.
+    train_trials : int
+        The study's training-set size: 5,000 (localization), 300,000 (generalized),
+        250,000 (specialized). Validation and test splits have 1,000 trials each.
+    """
+
+    name: str
+    world: WorldConfig
+    arenas: str
+    n_arenas: int
+    start: str
+    target: str
+    classify: bool
+    train_trials: int
+    validation_trials: int = 1000
+    test_trials: int = 1000
+
+    @property
+    def n_classes(self) -> int:
+        return self.n_arenas if self.classify else 0
+
+    def split_size(self, split: str) -> int:
+        check_option("split", split, SPLITS)
+        return {"train": self.train_trials, "validation": self.validation_trials,
+                "test": self.test_trials}[split]
+
+    def fingerprint(self) -> str:
+        """Short hash of everything that shapes a trial (names the cache)."""
+        return hashlib.sha1(repr((self, ARENA_SEED, _FORMAT_VERSION)).encode()).hexdigest()[:10]
+
+
+_FORMAT_VERSION = 1
+
+
+def task_config(task: str, **overrides) -> TaskConfig:
+    """The default :class:`TaskConfig` of a task, optionally with fields replaced.
+
+    Examples
+    --------
+    >>> task_config("generalized").world.arena.mean_radius
+    0.33
+    """
+    check_option("task", task, TASKS)
+    small = ArenaConfig(mean_radius=0.33)
+    defaults = {
+        "localization": TaskConfig("localization", WorldConfig(arena=ArenaConfig(mean_radius=1.0)),
+                                   arenas="fixed", n_arenas=1, start="uniform",
+                                   target="arena", classify=False, train_trials=5000),
+        "generalized": TaskConfig("generalized", WorldConfig(arena=small), arenas="novel",
+                                  n_arenas=0, start="uniform", target="start_relative",
+                                  classify=False, train_trials=300_000),
+        "specialized": TaskConfig("specialized", WorldConfig(arena=small), arenas="fixed",
+                                  n_arenas=100, start="centre", target="arena",
+                                  classify=True, train_trials=250_000),
+    }[task]
+    return replace(defaults, **overrides) if overrides else defaults
+
+
+@functools.lru_cache(maxsize=8)
+def _fixed_arenas(task: str, n_arenas: int, arena: ArenaConfig) -> np.ndarray:
+    rng = np.random.default_rng(np.random.SeedSequence([ARENA_SEED, _TASK_CODE[task]]))
+    verts = np.stack([random_vertices(rng, arena) for _ in range(n_arenas)])
+    verts.setflags(write=False)
+    return verts
+
+
+def fixed_arenas(task: str, config: TaskConfig | None = None) -> np.ndarray:
+    """Vertices (n_arenas, V, 2) of a task's fixed arenas (empty for novel arenas)."""
+    config = config or task_config(task)
+    if config.arenas != "fixed":
+        return np.empty((0, config.world.arena.n_vertices, 2))
+    return _fixed_arenas(config.name, config.n_arenas, config.world.arena)
+
+
+def trial_seed(task: str, split: str, seed: int, index: int) -> np.random.SeedSequence:
+    """The SeedSequence of trial ``index`` of ``(task, split, seed)``."""
+    return np.random.SeedSequence([seed, _TASK_CODE[task], _SPLIT_CODE[split], index])
+
+
+@dataclass
+class TrialBatch:
+    """``B`` trials of ``T`` network steps (time-major, as the LSTM consumes them).
+
+    Attributes
+    ----------
+    inputs : float32 (T, B, F)
+        Noisy sensory inputs; columns named by ``features``.
+    target : (T, B, 2)
+        Regression target in the task's frame (m).
+    position : (T, B, 2)
+        True position at the end of each step, arena frame (m).
+    start : (B, 2)
+        Start position, arena frame (m).
+    head_direction : (T, B)
+        True head direction at the end of each step, rad in [-pi, pi).
+    contact : bool (T, B)
+        Whether the step had a boundary contact.
+    environment : int (B,)
+        Arena id: index of the fixed arena, or the trial index for novel arenas.
+    arena_vertices : (B, V, 2)
+    trial_index : int (B,)
+        Index ``i`` of each trial within its split.
+    dt : float
+        Network step (s).
+    task, split : str
+    seed : int
+    features : tuple of str
+    """
+
+    inputs: np.ndarray
+    target: np.ndarray
+    position: np.ndarray
+    start: np.ndarray
+    head_direction: np.ndarray
+    contact: np.ndarray
+    environment: np.ndarray
+    arena_vertices: np.ndarray
+    trial_index: np.ndarray
+    dt: float
+    task: str
+    split: str
+    seed: int
+    features: tuple = FEATURES
+
+    def __len__(self) -> int:
+        return self.inputs.shape[1]
+
+    @property
+    def n_steps(self) -> int:
+        return self.inputs.shape[0]
+
+    @property
+    def time(self) -> np.ndarray:
+        """Time (s) at the end of each step, since the trial's start."""
+        return self.dt * np.arange(1, self.n_steps + 1)
+
+    def feature(self, name: str) -> np.ndarray:
+        """Column ``name`` of the inputs, (T, B)."""
+        check_option("name", name, self.features)
+        return self.inputs[..., self.features.index(name)]
+
+    def select(self, index) -> "TrialBatch":
+        """A batch of a subset of trials (``index`` into the trial axis)."""
+        index = np.atleast_1d(np.arange(len(self))[index])
+        out = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name in _TIME_MAJOR:
+                value = value[:, index]
+            elif f.name in _TRIAL_MAJOR:
+                value = value[index]
+            out[f.name] = value
+        return TrialBatch(**out)
+
+    @classmethod
+    def concatenate(cls, batches) -> "TrialBatch":
+        """Join batches of the same task/split along the trial axis."""
+        batches = list(batches)
+        first = batches[0]
+        out = {}
+        for f in fields(cls):
+            values = [getattr(b, f.name) for b in batches]
+            if f.name in _TIME_MAJOR:
+                out[f.name] = np.concatenate(values, axis=1)
+            elif f.name in _TRIAL_MAJOR:
+                out[f.name] = np.concatenate(values, axis=0)
+            else:
+                out[f.name] = getattr(first, f.name)
+        return cls(**out)
+
+
+_TIME_MAJOR = ("inputs", "target", "position", "head_direction", "contact")
+_TRIAL_MAJOR = ("start", "environment", "arena_vertices", "trial_index")
+
+
+def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *,
+                first: int = 0, config: TaskConfig | None = None) -> TrialBatch:
+    """Generate trials ``first, ..., first + n_trials - 1`` of a task's split.
+
+    Parameters
+    ----------
+    task : {"localization", "generalized", "specialized"}
+    n_trials : int
+        Number of trials (>= 0).
+    split : {"train", "validation", "test"}
+    seed : int
+        Seed of the whole split; trial ``i`` depends only on ``(task, split, seed, i)``.
+    first : int
+        Index of the first trial, so ``make_trials(..., 10, first=0)`` equals
+        ``make_trials(..., 5, first=0)`` joined with ``make_trials(..., 5, first=5)``.
+    config : TaskConfig, optional
+        A modified task (e.g. ``task_config("generalized", world=...)`` for a noiseless
+        world); defaults to :func:`task_config(task) <task_config>`.
+
+    Returns
+    -------
+    TrialBatch
+    """
+    check_option("task", task, TASKS)
+    check_option("split", split, SPLITS)
+    n_trials = check_nonnegative_int("n_trials", n_trials)
+    first = check_nonnegative_int("first", first)
+    seed = check_nonnegative_int("seed", seed)
+    config = config or task_config(task)
+    if config.name != task:
+        raise ValueError(f"`config` is for task {config.name!r}; got task={task!r}")
+    world = config.world
+    motion = world.motion
+    n_steps, n_fine, n_verts = motion.n_steps, motion.n_steps * motion.substeps, \
+        world.arena.n_vertices
+
+    verts = np.empty((n_trials, n_verts, 2))
+    start = np.zeros((n_trials, 2))
+    heading0 = np.empty(n_trials)
+    speed_noise = np.empty((n_trials, n_fine))
+    turn_noise = np.empty((n_trials, n_fine))
+    draws = np.empty((n_trials, N_NOISE_DRAWS, n_steps))
+    environment = np.empty(n_trials, dtype=np.int64)
+    trial_index = np.arange(first, first + n_trials, dtype=np.int64)
+    fixed = fixed_arenas(task, config)
+
+    for b, i in enumerate(trial_index):
+        rng = np.random.default_rng(trial_seed(task, split, seed, int(i)))
+        if config.arenas == "novel":
+            verts[b] = random_vertices(rng, world.arena)
+            environment[b] = i
+        else:
+            environment[b] = rng.integers(config.n_arenas) if config.n_arenas > 1 else 0
+            verts[b] = fixed[environment[b]]
+        if config.start == "uniform":
+            start[b] = _uniform_start(verts[b], rng, world.sensors.touch_range)
+        heading0[b] = rng.uniform(-np.pi, np.pi)
+        speed_noise[b] = rng.standard_normal(n_fine)
+        turn_noise[b] = rng.standard_normal(n_fine)
+        draws[b] = rng.standard_normal((N_NOISE_DRAWS, n_steps))
+
+    sim = simulate_motion(verts, start, heading0, speed_noise, turn_noise, motion,
+                          world.sensors)
+    inputs = sense(sim, world.noise, draws, heading0)
+    position = sim["position"]
+    target = position - start[:, None, :] if config.target == "start_relative" else position
+    return TrialBatch(
+        inputs=np.ascontiguousarray(inputs.transpose(1, 0, 2)),
+        target=np.ascontiguousarray(target.transpose(1, 0, 2)),
+        position=np.ascontiguousarray(position.transpose(1, 0, 2)),
+        start=start,
+        head_direction=np.ascontiguousarray(sim["heading"].T),
+        contact=np.ascontiguousarray(sim["contact"].T),
+        environment=environment,
+        arena_vertices=verts,
+        trial_index=trial_index,
+        dt=motion.network_dt,
+        task=task,
+        split=split,
+        seed=seed,
+    )
+
+
+def _uniform_start(vertices, rng, clearance, tries: int = 16) -> np.ndarray:
+    points = sample_uniform(vertices, rng, tries)
+    dist, _, _ = wall_distance(vertices, points)
+    ok = np.flatnonzero(dist >= clearance)
+    return points[ok[0]] if ok.size else np.zeros(2)
+
+
+# --------------------------------------------------------------------------- cache
+CACHE_CHUNK = 1000
+_CACHED_FIELDS = ("inputs", "position", "head_direction", "contact", "start",
+                  "environment", "arena_vertices", "trial_index")
+
+
+def default_cache_dir() -> Path:
+    """``$HIPPO_PROBE_CACHE`` or ``~/.cache/hippo_probe/trials``."""
+    return Path(os.environ.get("HIPPO_PROBE_CACHE",
+                               Path.home() / ".cache" / "hippo_probe" / "trials"))
+
+
+def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *,
+                  first: int = 0, cache_dir=None, config: TaskConfig | None = None
+                  ) -> TrialBatch:
+    """Like :func:`make_trials`, but stored on disk (zarr) and reused.
+
+    Trials are stored in blocks of :data:`CACHE_CHUNK` consecutive indices, one zarr
+    group per block, each written beside and renamed into place (atomic: concurrent
+    processes and interrupted runs never see half a block). The store's name carries a
+    fingerprint of the task's configuration, so a change to the world never reuses stale
+    trials.
+    """
+    import zarr
+
+    check_option("task", task, TASKS)
+    check_option("split", split, SPLITS)
+    n_trials = check_nonnegative_int("n_trials", n_trials)
+    first = check_nonnegative_int("first", first)
+    config = config or task_config(task)
+    root = Path(cache_dir or default_cache_dir()) / f"{task}-{split}-seed{seed}-{config.fingerprint()}"
+    root.mkdir(parents=True, exist_ok=True)
+    blocks = []
+    stop = first + n_trials
+    for block in range(first // CACHE_CHUNK, -(-stop // CACHE_CHUNK)):
+        path = root / f"block{block:06d}.zarr"
+        if not path.exists():
+            batch = make_trials(task, CACHE_CHUNK, split, seed, first=block * CACHE_CHUNK,
+                                config=config)
+            tmp = Path(tempfile.mkdtemp(dir=root, prefix=".tmp-"))
+            group = zarr.open_group(str(tmp / "g"), mode="w")
+            for name in _CACHED_FIELDS:
+                value = getattr(batch, name)
+                group.create_array(name, data=value, chunks=value.shape)
+            try:
+                os.rename(tmp / "g", path)
+            except OSError:  # another process won the race; its block is identical
+                pass
+            shutil.rmtree(tmp, ignore_errors=True)
+        group = zarr.open_group(str(path), mode="r")
+        lo = max(first, block * CACHE_CHUNK) - block * CACHE_CHUNK
+        hi = min(stop, (block + 1) * CACHE_CHUNK) - block * CACHE_CHUNK
+        data = {}
+        for name in _CACHED_FIELDS:
+            arr = group[name]
+            data[name] = arr[:, lo:hi] if name in _TIME_MAJOR else arr[lo:hi]
+        blocks.append(data)
+    data = {name: (np.concatenate([b[name] for b in blocks],
+                                  axis=1 if name in _TIME_MAJOR else 0)
+                   if blocks else None) for name in _CACHED_FIELDS}
+    if not blocks:
+        return make_trials(task, 0, split, seed, config=config)
+    start = data["start"]
+    target = data["position"] - start[None] if config.target == "start_relative" \
+        else data["position"]
+    return TrialBatch(target=target, dt=config.world.motion.network_dt, task=task,
+                      split=split, seed=seed, **data)

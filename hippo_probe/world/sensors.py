@@ -1,0 +1,58 @@
+"""Turn what happened (true motion and contacts) into what the rat senses (noisy inputs).
+
+The generative noise model is :class:`~hippo_probe.world.config.NoiseModel`; columns of the
+result are :data:`~hippo_probe.world.config.FEATURES`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .config import FEATURES, NoiseModel
+
+#: Standard normal draws needed per trial and network step (rows of ``noise_draws``).
+N_NOISE_DRAWS = 6
+
+
+def wrap_angle(a):
+    """Wrap angles to [-pi, pi)."""
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+def sense(motion: dict, noise: NoiseModel, noise_draws: np.ndarray,
+          initial_heading: np.ndarray) -> np.ndarray:
+    """Noisy network inputs (B, T, F) from a simulation (see ``simulate_motion``).
+
+    Parameters
+    ----------
+    motion : dict
+        Output of :func:`~hippo_probe.world.motion.simulate_motion` (arrays (B, T, ...)).
+    noise : NoiseModel
+    noise_draws : (B, 6, T) standard normal draws, one row per noise source in the order
+        speed, rotation, head direction, turn, contact distance, contact angle.
+    initial_heading : (B,) heading before the first step (for the first heading change).
+    """
+    z = noise_draws
+    disp = motion["displacement"]
+    gain = 1.0 + noise.speed_sd * z[:, 0]
+    rot = noise.rotation_sd * z[:, 1]
+    c, s = np.cos(rot), np.sin(rot)
+    dx = gain * (c * disp[..., 0] - s * disp[..., 1])
+    dy = gain * (s * disp[..., 0] + c * disp[..., 1])
+
+    heading = motion["heading"]
+    hd = heading + noise.head_direction_sd * z[:, 2]
+    previous = np.concatenate([initial_heading[:, None], heading[:, :-1]], axis=1)
+    dhd = wrap_angle(heading - previous) + noise.turn_sd * z[:, 3]
+
+    touched = motion["contact"]
+    dist = np.where(touched, motion["contact_distance"] + noise.contact_distance_sd * z[:, 4],
+                    0.0)
+    beta = motion["contact_angle"] + noise.contact_angle_sd * z[:, 5]
+    cos_b = np.where(touched, np.cos(beta), 0.0)
+    sin_b = np.where(touched, np.sin(beta), 0.0)
+
+    columns = (dx, dy, np.cos(hd), np.sin(hd), dhd, touched.astype(float), dist, cos_b,
+               sin_b)
+    assert len(columns) == len(FEATURES)
+    return np.stack(columns, axis=-1).astype(np.float32)

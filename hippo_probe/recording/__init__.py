@@ -1,0 +1,22 @@
+"""Recordings: one session layout for networks and animals (schema v1).
+
+A recording is a plain ``xarray.Dataset`` stored as a zarr store; see
+``recordings/README.md`` for the format and :mod:`hippo_probe.recording.schema` for the
+names, dims, units and long names in one table. Nothing here imports torch.
+"""
+
+from .arrays import bin_spikes, from_arrays
+from .config import DEFAULTS, RecordingConfig
+from .layout import stack_trials, trial_aligned_chunks, trial_blocks, trial_layout
+from .nwb import from_nwb, to_nwb
+from .schema import SCHEMA_VERSION, VARIABLES, annotate, attrs_for
+from .select import select_trials
+from .store import open_recording, save_recording
+from .validate import validate
+
+__all__ = [
+    "DEFAULTS", "RecordingConfig", "SCHEMA_VERSION", "VARIABLES", "annotate", "attrs_for",
+    "bin_spikes", "from_arrays", "from_nwb", "open_recording", "save_recording",
+    "select_trials", "stack_trials", "to_nwb", "trial_aligned_chunks", "trial_blocks",
+    "trial_layout", "validate",
+]

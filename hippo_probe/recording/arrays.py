@@ -1,0 +1,238 @@
+"""``from_arrays``: a valid recording from plain numpy arrays; spike binning."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validators import check_finite, check_option, check_shape
+from ..errors import RecordingError
+from .layout import assemble, trial_blocks
+from .schema import annotate
+from .validate import _v, validate
+
+#: Metres per unit of the position units ``from_arrays`` accepts.
+LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+
+
+def wrap_angle(angle):
+    """Wrap radians into [-pi, pi)."""
+    return np.mod(np.asarray(angle, dtype=float) + np.pi, 2 * np.pi) - np.pi
+
+
+def check_time(time, name="time"):
+    """Return ``time`` as a finite, strictly increasing float64 1-D array."""
+    time = np.asarray(time, dtype=float)
+    if time.ndim != 1 or time.size == 0:
+        raise ValueError(f"`{name}` must be a non-empty 1-D array of seconds; got shape "
+                         f"{time.shape}")
+    check_finite(name, time)
+    step = np.diff(time)
+    if (step <= 0).any():
+        i = int(np.flatnonzero(step <= 0)[0])
+        raise RecordingError(f"`{name}` must be strictly increasing; {name}[{i}] = "
+                             f"{_v(time[i])} is followed by {name}[{i + 1}] = {_v(time[i + 1])}")
+    return time
+
+
+def bin_spikes(spike_times, time, trial, trial_start, trial_stop):
+    """Count each unit's spikes on the tracking samples (nearest sample, within trials).
+
+    Sample ``i`` of a trial covers the part of the trial's interval ``[trial_start,
+    trial_stop]`` nearer to ``time[i]`` than to any other sample of the trial: from the
+    midpoint with the previous sample (or ``trial_start``) to the midpoint with the next
+    one (or ``trial_stop``, inclusive). Spikes outside every trial are not counted, so the
+    counts add up to the spikes inside the trials' intervals.
+
+    Parameters
+    ----------
+    spike_times : sequence of 1-D arrays
+        Spike times (s) of each unit, on the clock of ``time``.
+    time, trial : (n,) arrays
+        Sample times (strictly increasing) and trial id of each sample (contiguous).
+    trial_start, trial_stop : (n_trials,) arrays
+        Interval of each trial, in the order the trials appear in ``time``; intervals
+        must not overlap.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, n_units)`` float32 spike counts.
+
+    Examples
+    --------
+    >>> t = np.array([0.0, 1.0, 2.0])
+    >>> bin_spikes([[0.4, 0.6, 2.0, 5.0]], t, np.zeros(3, int), [0.0], [2.0]).ravel()
+    array([1., 1., 1.], dtype=float32)
+    """
+    time = np.asarray(time, dtype=float)
+    starts, stops, _ = trial_blocks(trial)
+    mid = (time[1:] + time[:-1]) / 2
+    left = np.empty_like(time)
+    right = np.empty_like(time)
+    left[1:], right[:-1] = mid, mid
+    left[starts] = trial_start
+    right[stops - 1] = trial_stop
+    is_last = np.zeros(time.size, dtype=bool)
+    is_last[stops - 1] = True
+    counts = np.zeros((time.size, len(spike_times)), dtype=np.float32)
+    for u, spikes in enumerate(spike_times):
+        spikes = check_finite(f"spike_times[{u}]", np.asarray(spikes, dtype=float).ravel())
+        i = np.searchsorted(left, spikes, side="right") - 1
+        inside = i >= 0
+        i, spikes = i[inside], spikes[inside]
+        inside = (spikes < right[i]) | ((spikes == right[i]) & is_last[i])
+        counts[:, u] = np.bincount(i[inside], minlength=time.size)
+    return counts
+
+
+def _unit_coords(unit, n_units):
+    """Unit ids and extra unit coords from ``None``, ids, or a table of columns."""
+    if unit is None:
+        return np.arange(n_units), {}
+    if hasattr(unit, "keys"):      # dict of columns or a pandas DataFrame
+        columns = {str(k): np.asarray(unit[k]) for k in unit.keys()}
+        key = next((k for k in ("unit", "id") if k in columns), None)
+        ids = columns.pop(key) if key else np.arange(n_units)
+    else:
+        ids, columns = np.asarray(unit), {}
+    check_shape("unit", ids, (n_units,))
+    for name, values in columns.items():
+        check_shape(f"unit[{name!r}]", values, (n_units,))
+    return ids, columns
+
+
+def _text(values):
+    """Store string arrays as variable-length strings (object dtype)."""
+    return values.astype(object) if values.dtype.kind in "US" else values
+
+
+def from_arrays(time, position, activity=None, spike_times=None, head_direction=None,
+                trial=None, environment=None, unit=None, position_units="m", **attrs):
+    """Build a valid recording from plain numpy arrays.
+
+    Parameters
+    ----------
+    time : (n,) float
+        Sample times (s since session start), strictly increasing.
+    position : (n, 2) float
+        Position (x, y) in ``position_units``; NaN where tracking was lost (kept as NaN).
+    activity : (n, n_units), optional
+        Activity per sample (finite); stored as float32. Give this or ``spike_times``.
+    spike_times : sequence of 1-D arrays, optional
+        Spike times (s) of each unit, binned onto the samples by :func:`bin_spikes`
+        (nearest sample within its trial); ``activity_kind`` becomes ``"spike_count"``.
+    head_direction : (n,) float, optional
+        Radians, allocentric, 0 = +x, counter-clockwise; wrapped into [-pi, pi); NaN
+        allowed.
+    trial : (n,) int, optional
+        Trial id of each sample (default: one trial, id 0). Each trial's samples must be
+        contiguous, and consecutive trials separated by at least one ``dt`` (the schema's
+        gap). Each trial spans ``[time of its first sample, time of its last sample]``.
+    environment : int or (n,) int, optional
+        Environment (arena) id, constant within a trial (default 0).
+    unit : optional
+        Unit ids (1-D), or a table of unit columns (dict or pandas DataFrame; ids in
+        column ``"unit"`` or ``"id"``, other columns such as ``"region"`` become unit
+        coords). Default ``0 .. n_units - 1``.
+    position_units : {"m", "cm", "mm"}
+        Units of ``position``; converted to metres.
+    **attrs
+        Dataset attrs. Defaults: ``source="animal"``, ``activity_kind="spike_count"``
+        with ``spike_times`` else ``"rate"``, ``dt`` = the median sample interval within
+        trials.
+
+    Returns
+    -------
+    xarray.Dataset
+        A recording that passes :func:`validate`.
+
+    Raises
+    ------
+    ValueError, RecordingError
+        Mismatched lengths, non-monotonic time, NaN or inf in ``activity``, inf in
+        ``position``, both or neither of ``activity`` and ``spike_times``, a trial split
+        into several blocks or trials without a gap.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(1000) * 0.02
+    >>> xy = np.c_[np.cos(t), np.sin(t)] * 50          # cm
+    >>> spikes = [np.array([0.5, 3.1, 7.7]), np.array([1.0])]
+    >>> rec = from_arrays(t, xy, spike_times=spikes, position_units="cm", subject="r1")
+    >>> rec.activity.sum("time").values
+    array([3., 1.], dtype=float32)
+    >>> float(rec.position.max())
+    0.5
+    """
+    time = check_time(time)
+    n = time.size
+    scale = LENGTH_UNITS[check_option("position_units", position_units, LENGTH_UNITS)]
+    position = check_shape("position", np.asarray(position, dtype=float), (n, 2))
+    position = check_finite("position", position, allow_nan=True) * scale
+
+    trial = np.zeros(n, dtype=int) if trial is None else np.asarray(trial)
+    check_shape("trial", trial, (n,))
+    if trial.dtype.kind not in "iu":
+        raise ValueError(f"`trial` must hold integer ids; got dtype {trial.dtype}")
+    starts, stops, trial_id = trial_blocks(trial)
+    if np.unique(trial_id).size != trial_id.size:
+        raise RecordingError("`trial` must keep each trial's samples contiguous in time; "
+                             f"trial ids in order of appearance: {trial_id.tolist()[:20]}")
+    environment = np.asarray(0 if environment is None else environment)
+    if environment.ndim == 0:
+        environment = np.full(n, environment)
+    check_shape("environment", environment, (n,))
+    if environment.dtype.kind not in "iu":
+        raise ValueError(f"`environment` must hold integer ids; got dtype {environment.dtype}")
+    trial_env = environment[starts]
+    changes = environment != np.repeat(trial_env, stops - starts)
+    if changes.any():
+        i = int(np.flatnonzero(changes)[0])
+        raise RecordingError(f"`environment` must be constant within a trial; trial "
+                             f"{_v(trial[i])} changes environment at sample {i}")
+
+    if "dt" in attrs:
+        dt = attrs.pop("dt")
+    else:
+        within = np.diff(time)[np.diff(trial) == 0]
+        if within.size == 0:
+            raise ValueError("`dt` must be given (as a keyword) when no trial has two samples")
+        dt = float(np.median(within))
+    table = {"trial_start": time[starts], "trial_stop": time[stops - 1],
+             "trial_environment": trial_env}
+
+    if (activity is None) == (spike_times is None):
+        raise ValueError("give exactly one of `activity` and `spike_times`; got "
+                         + ("both" if activity is not None else "neither"))
+    if spike_times is not None:
+        if isinstance(spike_times, np.ndarray) and spike_times.dtype != object:
+            spike_times = [spike_times] if spike_times.ndim == 1 else list(spike_times)
+        values = bin_spikes(spike_times, time, trial, table["trial_start"],
+                            table["trial_stop"])
+        attrs.setdefault("activity_kind", "spike_count")
+    else:
+        activity = np.asarray(activity)
+        if activity.ndim == 1:
+            activity = activity[:, None]
+        check_shape("activity", activity, (n, None))
+        values = check_finite("activity", activity).astype(np.float32)
+        attrs.setdefault("activity_kind", "rate")
+    attrs.setdefault("source", "animal")
+
+    rec = assemble(time=time, trial=trial, trial_time=time - np.repeat(time[starts],
+                                                                          stops - starts),
+                   trial_id=trial_id, table=table, dt=dt, attrs=attrs)
+    ids, unit_columns = _unit_coords(unit, values.shape[1])
+    rec = rec.assign_coords(unit=_text(ids))
+    rec = rec.assign_coords({k: ("unit", _text(v)) for k, v in unit_columns.items()})
+    for name in unit_columns:
+        rec.variables[name].attrs.update(units="", long_name=name.replace("_", " "))
+    rec["activity"] = ("time", "unit"), values
+    rec["position"] = ("time", "space"), position
+    if head_direction is not None:
+        head_direction = check_shape("head_direction",
+                                     np.asarray(head_direction, dtype=float), (n,))
+        check_finite("head_direction", head_direction, allow_nan=True)
+        rec["head_direction"] = "time", wrap_angle(head_direction)
+    return validate(annotate(rec))

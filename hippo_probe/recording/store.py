@@ -1,0 +1,319 @@
+"""Zarr storage: ``save_recording`` (atomic) and ``open_recording`` (lazy, checked)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import uuid
+import warnings
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+import zarr
+from zarr.codecs import BloscCodec, Crc32cCodec
+
+from ..errors import RecordingError
+from .config import COMPLETE_MARKER, DEFAULTS
+from .layout import trial_aligned_chunks, trial_blocks
+from .validate import validate
+
+_PARTIAL = ".partial-"   # temp store beside the destination: .NAME.partial-PID-UUID
+_OLD = ".old-"           # previous store set aside during an overwrite: .NAME.old-UUID
+# xarray's decoders must leave the data as stored (times in seconds are not datetimes)
+_OPEN_KW = dict(consolidated=False, decode_times=False, decode_timedelta=False)
+
+
+def _is_url(path) -> bool:
+    return isinstance(path, str) and "://" in path and not path.startswith("file://")
+
+
+def _local(path) -> Path:
+    path = os.fspath(path)
+    return Path(path[len("file://"):] if path.startswith("file://") else path)
+
+
+def _samples_per_chunk(rec, config):
+    """Samples per chunk so the widest per-sample variable's chunk is ~``chunk_bytes``."""
+    row = max((v.dtype.itemsize * int(np.prod(v.shape[1:])) for v in rec.variables.values()
+               if v.dims[:1] == ("time",)), default=8)
+    return max(1, config.chunk_bytes // max(row, 1))
+
+
+def storage_time_chunk(rec, config=DEFAULTS) -> int:
+    """The zarr chunk length along ``time``: whole trials when the trials are equally long.
+
+    With equal trials of ``L`` samples the chunk holds as many whole trials as fit in
+    ``config.chunk_bytes`` (or, for trials longer than that, the largest divisor of
+    ``L`` that fits, when it is not tiny), so every chunk boundary is a trial boundary.
+    Otherwise (zarr chunks are regular) it is the size that fits, and
+    :func:`open_recording` aligns the dask chunks with the trials instead.
+    """
+    target = _samples_per_chunk(rec, config)
+    starts, stops, _ = trial_blocks(rec["trial"].values)
+    lengths = np.unique(stops - starts)
+    if lengths.size != 1:
+        return int(min(target, rec.sizes["time"]))
+    length = int(lengths[0])
+    if length <= target:
+        return length * min(target // length, len(starts))
+    divisors = [d for d in range(1, target + 1) if length % d == 0]
+    return divisors[-1] if divisors[-1] >= target // 4 else target
+
+
+def _encoding(rec, time_chunk, config):
+    compressors = [BloscCodec(cname=config.compressor, clevel=config.clevel,
+                              shuffle=config.shuffle)]
+    if config.checksum:
+        compressors.append(Crc32cCodec())
+    encoding = {}
+    for name, var in rec.variables.items():
+        chunks = tuple(time_chunk if dim == "time" else max(size, 1)
+                       for dim, size in zip(var.dims, var.shape))
+        entry = {"chunks": chunks} if chunks else {}
+        if var.dtype.kind not in "OUT":           # strings: zarr's vlen-utf8 + zstd
+            entry["compressors"] = compressors
+        encoding[name] = entry
+    return encoding
+
+
+def _prepare(rec, time_chunk):
+    """Strings as variable-length strings; dask arrays rechunked to the zarr chunks."""
+    rec = rec.drop_encoding()
+    text = {name: var.astype(object) for name, var in rec.variables.items()
+            if var.dtype.kind in "UST"}
+    if text:
+        rec = rec.assign_coords({k: v for k, v in text.items() if k in rec.coords})
+        rec = rec.assign({k: v for k, v in text.items() if k in rec.data_vars})
+    if any(var.chunks is not None for var in rec.variables.values()):
+        rec = rec.chunk({"time": time_chunk})
+    return rec
+
+
+def _write(rec, store, config, storage_options=None):
+    """Write ``rec`` to ``store`` and mark it complete last."""
+    time_chunk = storage_time_chunk(rec, config)
+    prepared = _prepare(rec, time_chunk)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*does not have a Zarr V3 specification")
+        prepared.to_zarr(store, mode="w-", zarr_format=3, consolidated=False,
+                         write_empty_chunks=True, storage_options=storage_options,
+                         encoding=_encoding(prepared, time_chunk, config))
+    group = zarr.open_group(store, mode="r+", storage_options=storage_options)
+    nchunks = {name: int(array.nchunks) for name, array in group.arrays()}
+    group.attrs[COMPLETE_MARKER] = {"complete": True, "nchunks": nchunks}
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _remove_stale(dest: Path):
+    """Remove temp stores of earlier saves to ``dest`` whose writer has died."""
+    for item in dest.parent.glob(f".{dest.name}{_PARTIAL}*"):
+        pid = item.name[len(f".{dest.name}{_PARTIAL}"):].split("-")[0]
+        if pid.isdigit() and not _pid_alive(int(pid)):
+            shutil.rmtree(item, ignore_errors=True)
+    if dest.exists():    # an overwrite died after the swap; the old copy is garbage
+        for item in dest.parent.glob(f".{dest.name}{_OLD}*"):
+            shutil.rmtree(item, ignore_errors=True)
+
+
+def save_recording(rec, path, overwrite=False, *, config=DEFAULTS, storage_options=None):
+    """Save a recording as a zarr store, atomically.
+
+    The store is written to a temporary directory beside ``path`` and renamed into place
+    only when complete (a marker attr is written last), so a crash leaves either nothing
+    or the previous store at ``path``, never a half store. With ``overwrite=True`` an
+    existing store is replaced only after the new one is complete: the old store is
+    renamed aside, the new one renamed in, then the old one deleted. Arrays are chunked
+    along ``time`` at trial boundaries (see :func:`storage_time_chunk`), compressed
+    (Blosc zstd + byte shuffle) with a CRC32C checksum per chunk; string coords are
+    stored as variable-length strings.
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        A recording; checked with :func:`validate` first (nothing is written if it fails).
+    path : str or os.PathLike
+        Destination directory (conventionally ``recordings/NAME.zarr``), or an fsspec URL
+        (``s3://…``); on a URL the write is not atomic (object stores have no rename) but
+        the completion marker is still written last, so a half store never opens.
+    overwrite : bool
+        Replace an existing store at ``path``.
+    config : RecordingConfig
+        Chunk size and codec.
+    storage_options : dict, optional
+        fsspec options for a URL.
+
+    Raises
+    ------
+    FileExistsError
+        ``path`` exists and ``overwrite`` is False, or ``path`` exists and is not a zarr
+        store (never replaced, even with ``overwrite``).
+    RecordingError
+        ``rec`` breaks the schema.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, os
+    >>> from hippo_probe.recording import from_arrays, open_recording
+    >>> t = np.arange(50) * 0.1
+    >>> rec = from_arrays(t, np.zeros((50, 2)), activity=np.ones((50, 3)))
+    >>> path = os.path.join(tempfile.mkdtemp(), "demo.zarr")
+    >>> save_recording(rec, path)
+    >>> open_recording(path).activity.shape
+    (50, 3)
+    """
+    validate(rec)
+    if _is_url(path):
+        _save_url(rec, path, overwrite, config, storage_options)
+        return
+    dest = _local(path).absolute()
+    if dest.exists() or dest.is_symlink():
+        if not overwrite:
+            raise FileExistsError(f"`path` already exists: {dest}; pass overwrite=True to "
+                                  "replace it")
+        if not (dest / "zarr.json").is_file():
+            raise FileExistsError(f"`path` exists and is not a zarr store: {dest}; refusing "
+                                  "to replace it")
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    _remove_stale(dest)
+    tmp = dest.parent / f".{dest.name}{_PARTIAL}{os.getpid()}-{uuid.uuid4().hex[:8]}"
+    try:
+        _write(rec, str(tmp), config)
+        if dest.exists():
+            old = dest.parent / f".{dest.name}{_OLD}{uuid.uuid4().hex[:8]}"
+            os.rename(dest, old)
+            os.rename(tmp, dest)
+            shutil.rmtree(old)
+        else:
+            os.rename(tmp, dest)     # fails if something appeared at dest meanwhile
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _save_url(rec, url, overwrite, config, storage_options):
+    import fsspec
+
+    fs, root = fsspec.core.url_to_fs(url, **(storage_options or {}))
+    if fs.exists(root):
+        if not overwrite:
+            raise FileExistsError(f"`path` already exists: {url}; pass overwrite=True to "
+                                  "replace it")
+        if not fs.exists(f"{root.rstrip('/')}/zarr.json"):
+            raise FileExistsError(f"`path` exists and is not a zarr store: {url}; refusing "
+                                  "to replace it")
+        fs.rm(root, recursive=True)
+    _write(rec, url, config, storage_options)
+
+
+def _check_complete(path, storage_options):
+    """Open the root group and check the completion marker and the chunk counts."""
+    label = os.fspath(path)
+    try:
+        group = zarr.open_group(path, mode="r", storage_options=storage_options)
+    except Exception as err:   # zarr raises many kinds for a missing or garbled zarr.json
+        raise RecordingError(f"`path` is not a readable zarr store: {label} "
+                             f"({type(err).__name__}: {err})") from err
+    marker = group.attrs.get(COMPLETE_MARKER)
+    if not isinstance(marker, dict) or not marker.get("complete"):
+        raise RecordingError(f"`path` holds a half-written or foreign zarr store: {label} "
+                             "(no completion marker; save_recording writes it last)")
+    for name, expected in marker.get("nchunks", {}).items():
+        try:
+            found = group[name].nchunks_initialized
+        except Exception as err:
+            raise RecordingError(f"`path` is a corrupt store: array `{name}` cannot be "
+                                 f"opened in {label} ({type(err).__name__}: {err})") from err
+        if found != expected:
+            raise RecordingError(f"`path` is a corrupt store: array `{name}` has {found} of "
+                                 f"its {expected} chunks in {label}")
+
+
+def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAULTS):
+    """Open a recording saved by :func:`save_recording`, lazily.
+
+    Data variables are dask arrays (nothing is read until computed); all coords, among
+    them the per-sample ``trial``, ``trial_time`` and ``environment``, are loaded, so
+    ``rec.groupby("trial")`` and ``rec.groupby("environment")`` work on the lazy
+    recording. The store is checked first: a missing completion marker (a half-written
+    store), a missing chunk, an unreadable array or a schema violation raises
+    :class:`~hippo_probe.errors.RecordingError`; a corrupted chunk raises when read (its
+    CRC32C checksum fails).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A local store or an fsspec URL.
+    chunks : "trials", dict or None
+        ``"trials"`` (default): dask chunks along ``time`` that never straddle two
+        trials (whole trials, up to ``config.chunk_bytes`` per chunk). Otherwise passed
+        to :func:`xarray.open_zarr` (``{}`` = the stored chunks; ``None`` = no dask).
+    storage_options : dict, optional
+        fsspec options for a URL.
+    config : RecordingConfig
+        Chunk size.
+
+    Returns
+    -------
+    xarray.Dataset
+
+    Examples
+    --------
+    >>> rec = open_recording("recordings/A2929-200711.zarr")       # doctest: +SKIP
+    >>> rec.activity.groupby("trial").mean().compute()              # doctest: +SKIP
+    """
+    if not _is_url(path):
+        local = _local(path)
+        if not local.exists():
+            aside = sorted(local.parent.glob(f".{local.name}{_OLD}*"))
+            hint = (f"; an interrupted overwrite left the previous version at {aside[0]}"
+                    if aside else "")
+            raise FileNotFoundError(f"`path` does not exist: {local}{hint}")
+        path = str(local)
+    _check_complete(path, storage_options)
+    storage = {} if chunks == "trials" else chunks
+    try:
+        rec = _open(path, storage, storage_options)
+        if chunks == "trials":
+            aligned = _trial_chunks(rec, config)
+            if aligned is not None:
+                rec = _open(path, {"time": aligned}, storage_options)
+    except RecordingError:
+        raise
+    except Exception as err:
+        raise RecordingError(f"`path` is a corrupt store: {os.fspath(path)} "
+                             f"({type(err).__name__}: {err})") from err
+    return validate(rec)
+
+
+def _open(path, chunks, storage_options):
+    with warnings.catch_warnings():
+        # trial-aligned dask chunks may cut stored chunks; intended (see open_recording)
+        warnings.filterwarnings("ignore", message="The specified chunks separate")
+        rec = xr.open_zarr(path, chunks=chunks, storage_options=storage_options, **_OPEN_KW)
+    rec.attrs.pop(COMPLETE_MARKER, None)
+    return rec.assign_coords({name: coord.variable.load()
+                              for name, coord in rec.coords.items()})
+
+
+def _trial_chunks(rec, config):
+    """Trial-aligned dask chunks along time, or None when the stored ones already are."""
+    trial = rec["trial"].values
+    stored = next((v.chunks[v.dims.index("time")] for v in rec.data_vars.values()
+                   if "time" in v.dims and v.chunks is not None), None)
+    if stored is None:
+        return None
+    starts = set(trial_blocks(trial)[0].tolist()) | {trial.size}
+    if set(np.cumsum(stored).tolist()) <= starts:
+        return None
+    return trial_aligned_chunks(trial, _samples_per_chunk(rec, config))
+

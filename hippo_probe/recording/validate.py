@@ -1,0 +1,260 @@
+"""``validate``: check a recording against schema v1."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from ..errors import RecordingError
+from .config import DEFAULTS
+from .layout import trial_blocks
+from .schema import COV, REQUIRED_ATTRS, SCHEMA_VERSION, SOURCES, SPACE, VARIABLES
+
+# Per-sample variables whose values are checked (cheap on in-memory recordings; a full
+# pass over the data on lazy ones, so only when asked): name -> NaN allowed.
+_FINITE_CHECKS = {
+    "activity": False,
+    "position": True,
+    "head_direction": True,
+    "speed": True,
+    "estimate": True,
+    "estimate_pi": True,
+    "estimate_sh": True,
+    "estimate_nb": True,
+    "estimate_pf": True,
+    "estimate_pfslam": True,
+    "pf_cov": True,
+    "class_probability": True,
+    "class_probability_pfslam": True,
+}
+
+
+def _v(value):
+    """repr of a value, numpy scalars shown as plain Python numbers."""
+    return repr(value.item() if isinstance(value, np.generic) else value)
+
+
+def _fail(name, rule):
+    raise RecordingError(f"`{name}` {rule}")
+
+
+def _first_bad(mask):
+    return int(np.flatnonzero(mask)[0])
+
+
+def validate(rec, *, check_data=None, config=DEFAULTS):
+    """Check that ``rec`` follows the recording schema v1; return it unchanged.
+
+    Checks the dataset attrs, the presence, dims, dtypes, ``units`` and ``long_name`` of
+    every schema variable, the time axis (finite, strictly increasing), the trial
+    structure (each trial one contiguous block of samples listed in the trial table, in
+    table order, inside ``[trial_start, trial_stop]``, ``trial_time = time -
+    trial_start``, consecutive trials separated by a gap of at least one ``dt``), the
+    environments (constant within a trial, equal to ``trial_environment``, listed in
+    ``environment_id``) and, when ``check_data``, the values (``activity`` finite; no inf
+    anywhere; ``head_direction`` in [-pi, pi); probabilities in [0, 1]).
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        The recording.
+    check_data : bool or None
+        Check the values of the per-sample data variables. ``None`` (default) checks them
+        when they are in memory and skips them on lazy (dask-backed) variables, where the
+        check would read the whole recording.
+    config : RecordingConfig
+        Tolerances (``gap_jitter``, ``time_atol``).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``rec`` itself, so ``rec = validate(build())`` reads naturally.
+
+    Raises
+    ------
+    RecordingError
+        Naming the variable (or attr) and the rule broken.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hippo_probe.recording import from_arrays, validate
+    >>> t = np.arange(100) * 0.1
+    >>> rec = from_arrays(time=t, position=np.zeros((100, 2)), activity=np.ones((100, 3)))
+    >>> validate(rec) is rec
+    True
+    """
+    if not isinstance(rec, xr.Dataset):
+        raise RecordingError(f"a recording must be an xarray.Dataset; got {type(rec).__name__}")
+    _check_attrs(rec)
+    _check_variables(rec)
+    _check_time(rec)
+    _check_trials(rec, config)
+    _check_environments(rec)
+    _check_values(rec, check_data)
+    return rec
+
+
+def _check_attrs(rec):
+    for name, types in REQUIRED_ATTRS.items():
+        if name not in rec.attrs:
+            _fail(name, "(dataset attr) is missing; every recording carries "
+                        f"{sorted(REQUIRED_ATTRS)}")
+        value = rec.attrs[name]
+        if isinstance(value, bool) or not isinstance(value, types):
+            _fail(name, f"(dataset attr) must be of type {types[0].__name__}; got {_v(value)}")
+    if rec.attrs["schema_version"] != SCHEMA_VERSION:
+        _fail("schema_version", f"(dataset attr) must be {SCHEMA_VERSION}; "
+                                f"got {_v(rec.attrs['schema_version'])}")
+    if rec.attrs["source"] not in SOURCES:
+        _fail("source", f"(dataset attr) must be one of {SOURCES}; got {_v(rec.attrs['source'])}")
+    if not rec.attrs["activity_kind"]:
+        _fail("activity_kind", "(dataset attr) must be a non-empty string, e.g. 'spike_count'")
+    dt = rec.attrs["dt"]
+    if not (np.isfinite(dt) and dt > 0):
+        _fail("dt", f"(dataset attr) must be a finite number of seconds > 0; got {_v(dt)}")
+
+
+def _check_variables(rec):
+    for name, spec in VARIABLES.items():
+        if name not in rec.variables:
+            if spec.required:
+                _fail(name, "is missing; every recording has it (schema v1)")
+            continue
+        if spec.coord and name not in rec.coords:
+            _fail(name, "must be a coordinate, not a data variable")
+        if not spec.coord and name in rec.coords:
+            _fail(name, "must be a data variable, not a coordinate")
+        var = rec.variables[name]
+        if var.dims != spec.dims:
+            _fail(name, f"must have dims {spec.dims}; got {var.dims}")
+        if var.dtype.kind not in spec.kind:
+            _fail(name, f"must have a dtype of kind {_v(spec.kind)}; got {var.dtype}")
+    if rec["activity"].dtype != np.float32:
+        _fail("activity", f"must be float32; got {rec['activity'].dtype}")
+    for name, var in rec.variables.items():
+        for key in ("units", "long_name"):
+            if not isinstance(var.attrs.get(key), str):
+                _fail(name, f"has no `{key}` attr (a string); every variable carries "
+                            "`units` and `long_name` (see hippo_probe.recording.schema)")
+        if not var.attrs["long_name"]:
+            _fail(name, "has an empty `long_name` attr")
+    labels = {"space": SPACE, "cov": COV}
+    for name, want in labels.items():
+        if name in rec.coords and tuple(map(str, rec[name].values)) != want:
+            _fail(name, f"must be {list(want)}; got {list(map(str, rec[name].values))}")
+    for name in ("unit", "trial_id", "environment_id"):
+        values = rec[name].values
+        uniq, counts = np.unique(values, return_counts=True)
+        if (counts > 1).any():
+            _fail(name, f"must hold unique ids; {_v(uniq[counts > 1][0])} appears "
+                        f"{counts[counts > 1][0]} times")
+
+
+def _check_time(rec):
+    time = rec["time"].values
+    if not np.isfinite(time).all():
+        _fail("time", f"must be finite; got {_v(time[_first_bad(~np.isfinite(time))])} at "
+                      f"index {_first_bad(~np.isfinite(time))}")
+    step = np.diff(time)
+    if (step <= 0).any():
+        i = _first_bad(step <= 0)
+        _fail("time", f"must be strictly increasing; time[{i}] = {_v(time[i])} is followed by "
+                      f"time[{i + 1}] = {_v(time[i + 1])}")
+
+
+def _check_trials(rec, config):
+    time = rec["time"].values
+    trial = rec["trial"].values
+    trial_ids = rec["trial_id"].values
+    starts, stops, block_ids = trial_blocks(trial)
+    seen, counts = np.unique(block_ids, return_counts=True)
+    if (counts > 1).any():
+        _fail("trial", f"samples of each trial must be contiguous in time; trial "
+                       f"{_v(seen[counts > 1][0])} appears in {counts[counts > 1][0]} separate "
+                       "blocks")
+    unknown = ~np.isin(block_ids, trial_ids)
+    if unknown.any():
+        _fail("trial", f"value {_v(block_ids[unknown][0])} is missing from the trial table "
+                       f"(`trial_id` = {trial_ids.tolist()[:10]}...)")
+    if len(block_ids) != len(trial_ids) or (block_ids != trial_ids).any():
+        empty = np.setdiff1d(trial_ids, block_ids)
+        if empty.size:
+            _fail("trial_id", f"lists trial {_v(empty[0])}, which has no samples; the trial "
+                              "table describes the samples present")
+        _fail("trial_id", "must list the trials in the order their samples appear in time; "
+                          f"got {trial_ids.tolist()[:10]}, samples in order "
+                          f"{block_ids.tolist()[:10]}")
+    t_start = rec["trial_start"].values
+    t_stop = rec["trial_stop"].values
+    first, last = time[starts], time[stops - 1]
+    for name, bad, rule in (
+            ("trial_start", ~np.isfinite(t_start), "must be finite"),
+            ("trial_stop", ~np.isfinite(t_stop), "must be finite"),
+            ("trial_start", t_start > first, "must be <= the time of the trial's first sample"),
+            ("trial_stop", t_stop < last, "must be >= the time of the trial's last sample"),
+            ("trial_start", np.r_[False, t_start[1:] < t_stop[:-1]],
+             "must be >= the previous trial's trial_stop (trials must not overlap)")):
+        if bad.any():
+            k = _first_bad(bad)
+            _fail(name, f"{rule}; trial {_v(trial_ids[k])} has trial_start {_v(t_start[k])}, "
+                        f"trial_stop {_v(t_stop[k])}, samples from {_v(first[k])} to {_v(last[k])}")
+    expected = time - np.repeat(t_start, stops - starts)
+    off = np.abs(rec["trial_time"].values - expected) > config.time_atol
+    if off.any():
+        i = _first_bad(off)
+        _fail("trial_time", f"must equal time - trial_start of the sample's trial; at index "
+                            f"{i} it is {_v(rec['trial_time'].values[i])}, expected "
+                            f"{_v(expected[i])}")
+    dt = float(rec.attrs["dt"])
+    gap = first[1:] - last[:-1]
+    short = gap < 2 * dt * (1 - config.gap_jitter)
+    if short.any():
+        k = _first_bad(short)
+        _fail("time", f"consecutive trials must be separated by a gap of at least one dt "
+                      f"(first sample of a trial >= 2 dt = {_v(2 * dt)} s after the last of the "
+                      f"previous one); trials {_v(trial_ids[k])} and {_v(trial_ids[k + 1])} are "
+                      f"{_v(gap[k])} s apart")
+
+
+def _check_environments(rec):
+    env = rec["environment"].values
+    trial_env = rec["trial_environment"].values
+    starts, stops, _ = trial_blocks(rec["trial"].values)
+    expected = np.repeat(trial_env, stops - starts)
+    off = env != expected
+    if off.any():
+        i = _first_bad(off)
+        _fail("environment", f"must be constant within a trial and equal its "
+                             f"`trial_environment`; at index {i} it is {_v(env[i])}, the trial "
+                             f"table says {_v(expected[i])}")
+    unknown = ~np.isin(trial_env, rec["environment_id"].values)
+    if unknown.any():
+        _fail("environment", f"value {_v(trial_env[unknown][0])} is missing from "
+                             "`environment_id`")
+
+
+def _check_values(rec, check_data):
+    for name, allow_nan in _FINITE_CHECKS.items():
+        if name not in rec.data_vars:
+            continue
+        var = rec[name]
+        if check_data is False or (check_data is None and var.chunks is not None):
+            continue
+        values = np.asarray(var.values)
+        bad = np.isinf(values) if allow_nan else ~np.isfinite(values)
+        if bad.any():
+            idx = tuple(int(i) for i in np.argwhere(bad)[0])
+            what = "inf" if allow_nan else "NaN or inf"
+            _fail(name, f"must not contain {what}; found {_v(values[idx])} at index {idx}")
+        if name == "head_direction":
+            out = (values < -np.pi) | (values >= np.pi)
+            if out.any():
+                i = _first_bad(out)
+                _fail(name, f"must be in radians in [-pi, pi); got {_v(values[i])} at index {i}")
+        if name.startswith("class_probability"):
+            out = (values < 0) | (values > 1)
+            if out.any():
+                idx = tuple(int(i) for i in np.argwhere(out)[0])
+                _fail(name, f"must be in [0, 1]; got {_v(values[idx])} at index {idx}")
+

@@ -1,0 +1,105 @@
+"""from_arrays, spike binning and the per-trial helpers."""
+
+import numpy as np
+import pytest
+
+from hippo_probe.errors import RecordingError
+from hippo_probe.recording import (bin_spikes, from_arrays, stack_trials, trial_aligned_chunks,
+                                   trial_layout, validate)
+
+from .conftest import assert_trial_aligned
+
+
+def test_spikes_binned_on_nearest_sample_within_trials():
+    time = np.r_[0.0, 1.0, 2.0, 10.0, 11.0]
+    trial = np.array([0, 0, 0, 1, 1])
+    spikes = [np.array([-0.1, 0.0, 0.49, 0.51, 1.5, 2.0, 2.01, 9.99, 10.0, 10.6, 11.0, 11.2])]
+    counts = bin_spikes(spikes, time, trial, [0.0, 10.0], [2.0, 11.0])[:, 0]
+    # [0, .5) [.5, 1.5) [1.5, 2] | [10, 10.5) [10.5, 11]; outside the trials dropped
+    np.testing.assert_array_equal(counts, [2, 1, 2, 1, 2])
+
+
+def test_from_arrays_spike_counts_add_up_and_units_convert():
+    rng = np.random.default_rng(1)
+    time = np.r_[np.arange(500) * 0.02, 20 + np.arange(300) * 0.02]
+    trial = np.repeat([0, 1], [500, 300])
+    spikes = [rng.uniform(-5, 35, 1000) for _ in range(3)]
+    xy = rng.uniform(0, 100, (800, 2))
+    xy[10] = np.nan
+    rec = from_arrays(time, xy, spike_times=spikes, trial=trial, position_units="cm",
+                      head_direction=np.full(800, 3 * np.pi / 2), unit=[7, 8, 9])
+    inside = [((s >= 0) & (s <= time[499])).sum() + ((s >= 20) & (s <= time[-1])).sum()
+              for s in spikes]
+    np.testing.assert_array_equal(rec.activity.sum("time").values, inside)
+    np.testing.assert_allclose(rec.position.values[11], xy[11] / 100)
+    assert np.isnan(rec.position.values[10]).all()
+    np.testing.assert_allclose(rec.head_direction.values, -np.pi / 2)
+    assert rec.attrs["activity_kind"] == "spike_count" and rec.attrs["source"] == "animal"
+    assert rec.attrs["dt"] == pytest.approx(0.02)
+    assert rec.activity.dtype == np.float32 and rec.unit.values.tolist() == [7, 8, 9]
+    assert rec.trial_start.values.tolist() == [0.0, 20.0]
+
+
+def test_from_arrays_activity_and_unit_table():
+    t = np.arange(10) * 0.1
+    rec = from_arrays(t, np.zeros((10, 2)), activity=np.ones((10, 2)),
+                      unit={"id": ["a", "b"], "region": ["ca1", "adn"]}, environment=4,
+                      activity_kind="lstm_hidden", source="network")
+    assert rec.region.values.tolist() == ["ca1", "adn"]
+    assert rec.environment_id.values.tolist() == [4]
+    assert rec.activity.attrs["units"] == "1"
+
+
+BAD = {
+    "mismatched lengths": (dict(position=np.zeros((9, 2))), ValueError, "`position` must have shape"),
+    "non-monotonic time": (dict(time=np.r_[0, 2, 1, 3:10]), RecordingError,
+                           "`time` must be strictly increasing"),
+    "activity with NaN": (dict(activity=np.r_[np.nan, np.ones(9)]), ValueError,
+                          "`activity` must not contain NaN or inf"),
+    "activity with inf": (dict(activity=np.r_[np.inf, np.ones(9)]), ValueError,
+                          "`activity` must not contain NaN or inf"),
+    "position with inf": (dict(position=np.r_[[[np.inf, 0]], np.zeros((9, 2))]), ValueError,
+                          "`position` must not contain inf"),
+    "unknown units": (dict(position_units="inch"), ValueError, "`position_units` must be one of"),
+    "both activity and spikes": (dict(spike_times=[np.r_[0.1]]), ValueError, "exactly one"),
+    "trials without a gap": (dict(trial=np.repeat([0, 1], 5)), RecordingError,
+                             "gap of at least one dt"),
+    "trial split": (dict(trial=np.r_[0, 0, 1, 1, 0, 0, 0, 0, 0, 0]), RecordingError, "contiguous"),
+    "environment changes in a trial": (dict(environment=np.r_[0, 1, np.zeros(8, int)]),
+                                       RecordingError, "constant within a trial"),
+    "unit ids of the wrong length": (dict(unit=[1, 2]), ValueError, "`unit` must have shape"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_from_arrays_bad_input(case):
+    change, error, message = BAD[case]
+    args = dict(time=np.arange(10) * 0.1, position=np.zeros((10, 2)), activity=np.ones(10))
+    args.update(change)
+    with pytest.raises(error, match=message):
+        from_arrays(**args)
+
+
+def test_trial_layout_matches_stack_trials_order():
+    T, B, dt = 4, 3, 0.5
+    rec = trial_layout(T, B, dt, environment=[2, 2, 5], trial_id=[10, 11, 12],
+                       start_position=np.zeros((B, 2)))
+    steps = np.arange(T)[:, None] * np.ones(B)        # (T, B): step index
+    trials = np.ones(T)[:, None] * np.arange(B)
+    assert (stack_trials(trials) == np.repeat(np.arange(B), T)).all()
+    np.testing.assert_allclose(rec.trial_time.values, (stack_trials(steps) + 1) * dt)
+    assert rec.trial.values.tolist() == np.repeat([10, 11, 12], T).tolist()
+    assert rec.environment_id.values.tolist() == [2, 5]
+    # one empty dt between trials: last sample of a trial + 2 dt = first of the next
+    assert rec.time.values[T] - rec.time.values[T - 1] == pytest.approx(2 * dt)
+    rec["activity"] = ("time", "unit"), np.zeros((T * B, 1), np.float32)
+    rec["position"] = ("time", "space"), np.zeros((T * B, 2))
+    from hippo_probe.recording import annotate
+    validate(annotate(rec.assign_coords(unit=[0])))
+
+
+def test_trial_aligned_chunks_never_straddle_trials():
+    trial = np.repeat(np.arange(6), [5, 5, 20, 3, 3, 9])
+    chunks = trial_aligned_chunks(trial, 8)
+    assert chunks == (5, 5, 7, 7, 6, 6, 5, 4)
+    assert_trial_aligned(trial, chunks)

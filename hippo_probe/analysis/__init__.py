@@ -1,0 +1,18 @@
+"""Analyses of recordings (schema v1): the tools a hippocampus lab uses on rodent data.
+
+Each analysis is a plain function of a recording (an ``xarray.Dataset``) returning
+labelled xarray objects whose ``attrs`` say how they were made; each works on dask-backed
+(lazy) recordings and never imports torch. Results plot themselves through the ``hp``
+accessor (``maps.hp.plot()``), registered by :mod:`hippo_probe.plot`.
+"""
+
+from .. import plot as _plot  # noqa: F401  (registers the ``.hp`` xarray accessor)
+from ._common import AnalysisWarning
+from .ratemaps import ratemaps
+from .spatial_information import spatial_information
+
+__all__ = [
+    "AnalysisWarning",
+    "ratemaps",
+    "spatial_information",
+]

@@ -1,0 +1,213 @@
+"""Per-bin sums of activity in one pass over the samples, eager or lazy (dask).
+
+Every tuning analysis (rate maps, head-direction curves, their shuffles) reduces to the
+same thing: for each bin ``b``, the number of samples in ``b`` and the sum of each unit's
+activity over them. :func:`bin_sums` computes it with a numba kernel that reads each
+sample's row of activity once and adds it to its bin's row, so no samples x bins matrix
+is ever formed and memory stays ``O(bins x units)``. On a dask-backed recording each time
+chunk is reduced on its own and the partial sums are added in a tree, so a recording much
+larger than memory streams through; the same graph runs under a ``dask.distributed``
+client.
+
+Bins are given as one integer per sample (-1 = not counted, e.g. position lost or speed
+too low). Circular time-shift shuffles are bins shifted against the activity; they are
+computed in the same pass (``shifts``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+#: Partial sums are combined this many at a time in the dask tree reduction.
+_SPLIT_EVERY = 8
+
+
+@numba.njit(cache=True, nogil=True)
+def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq):
+    """Add the samples of one time block to the accumulators (in place).
+
+    activity : (m, U) block of samples ``t0 .. t0 + m`` of the recording
+    bins : (n,) compact bin of every sample of the recording, -1 = skipped
+    shifts : (K,) circular shifts; shift ``k`` pairs activity at ``t`` with ``bins[t - s]``
+    lo : compact bins are stored at ``index - lo`` (a block touches a narrow range)
+    sums : (K, n_local, U) float64; counts : (K, n_local) int64
+    amin : (U,) running minimum over all samples (valid or not)
+    sumsq : (U,) sum of squares over the samples valid in the unshifted bins
+    """
+    m, n_units = activity.shape
+    n = bins.shape[0]
+    n_shifts = shifts.shape[0]
+    for i in range(m):
+        row = activity[i]
+        for u in range(n_units):
+            if row[u] < amin[u]:
+                amin[u] = row[u]
+        t = t0 + i
+        for k in range(n_shifts):
+            src = t - shifts[k]
+            if src < 0:
+                src += n
+            b = bins[src]
+            if b < 0:
+                continue
+            b -= lo
+            counts[k, b] += 1
+            acc = sums[k, b]
+            for u in range(n_units):
+                acc[u] += row[u]
+            if k == 0:
+                for u in range(n_units):
+                    sumsq[u] += row[u] * row[u]
+
+
+@dataclass
+class BinSums:
+    """Sums over the samples of each bin.
+
+    Attributes
+    ----------
+    sums : ndarray (K, n_bins, U)
+        Sum of each unit's activity over the samples of each bin, for each shift.
+    counts : ndarray (K, n_bins)
+        Number of samples in each bin (identical for every shift of a permutation).
+    amin : ndarray (U,)
+        Each unit's minimum activity over every sample of the recording.
+    sumsq : ndarray (U,)
+        Each unit's sum of squared activity over the samples counted (unshifted).
+    """
+
+    sums: np.ndarray
+    counts: np.ndarray
+    amin: np.ndarray
+    sumsq: np.ndarray
+
+
+def _block_range(bins, shifts, t0, t1):
+    """Smallest and largest compact bin a block can touch, or (0, -1) if none."""
+    n = bins.shape[0]
+    lo, hi = np.iinfo(np.int64).max, -1
+    for s in shifts:
+        a, b = (t0 - s) % n, (t1 - 1 - s) % n
+        parts = [bins[a:b + 1]] if a <= b else [bins[a:], bins[:b + 1]]
+        for p in parts:
+            valid = p[p >= 0]
+            if valid.size:
+                lo, hi = min(lo, int(valid.min())), max(hi, int(valid.max()))
+    return (0, -1) if hi < 0 else (lo, hi)
+
+
+def _partial(block, bins, t0, shifts):
+    """Reduce one (time, unit) block to (lo, sums, counts, amin, sumsq)."""
+    block = np.ascontiguousarray(block)
+    n_units = block.shape[1]
+    lo, hi = _block_range(bins, shifts, t0, t0 + block.shape[0])
+    width = hi - lo + 1
+    sums = np.zeros((len(shifts), width, n_units))
+    counts = np.zeros((len(shifts), width), np.int64)
+    amin = np.full(n_units, np.inf)
+    sumsq = np.zeros(n_units)
+    if block.dtype.kind not in "fiu" or block.dtype == np.float16:
+        block = block.astype(np.float64)
+    _accumulate(block, bins, t0, shifts, lo, sums, counts, amin, sumsq)
+    return lo, sums, counts, amin, sumsq
+
+
+def _combine(parts):
+    """Add partials that may cover different compact-bin ranges."""
+    parts = [p for p in parts if p[1].shape[1] > 0] or parts[:1]
+    lo = min(p[0] for p in parts)
+    hi = max(p[0] + p[1].shape[1] for p in parts)
+    k, _, n_units = parts[0][1].shape
+    sums = np.zeros((k, hi - lo, n_units))
+    counts = np.zeros((k, hi - lo), np.int64)
+    amin = np.full(n_units, np.inf)
+    sumsq = np.zeros(n_units)
+    for p_lo, p_sums, p_counts, p_amin, p_sumsq in parts:
+        sl = slice(p_lo - lo, p_lo - lo + p_sums.shape[1])
+        sums[:, sl] += p_sums
+        counts[:, sl] += p_counts
+        np.minimum(amin, p_amin, out=amin)
+        sumsq += p_sumsq
+    return lo, sums, counts, amin, sumsq
+
+
+def _finish(part, n_bins):
+    lo, sums, counts, amin, sumsq = part
+    k, width, n_units = sums.shape
+    full_sums = np.zeros((k, n_bins, n_units))
+    full_counts = np.zeros((k, n_bins), np.int64)
+    full_sums[:, lo:lo + width] = sums
+    full_counts[:, lo:lo + width] = counts
+    return BinSums(full_sums, full_counts, amin, sumsq)
+
+
+def bin_sums(activity, bins, n_bins, shifts=(0,)):
+    """Per-bin sample counts and activity sums, in one pass over the samples.
+
+    .. math:: S_{k,b,u} = \\sum_{t:\\, bins[t - s_k] = b} a_{t,u}, \\qquad
+              N_{k,b} = \\#\\{t: bins[t - s_k] = b\\}
+
+    Parameters
+    ----------
+    activity : numpy or dask array (time, unit)
+        Samples; a dask array is reduced chunk by chunk (lazily, bounded memory).
+    bins : ndarray (time,) of int
+        Bin of every sample in ``[0, n_bins)``; -1 = sample not counted.
+    n_bins : int
+        Number of bins.
+    shifts : sequence of int
+        Circular shifts (in samples) of ``bins`` against ``activity``; 0 = no shift.
+
+    Returns
+    -------
+    BinSums
+    """
+    bins = np.ascontiguousarray(bins, dtype=np.int64)
+    shifts = np.asarray(shifts, dtype=np.int64) % max(len(bins), 1)
+    if not hasattr(activity, "dask"):
+        return _finish(_partial(np.asarray(activity), bins, 0, shifts), n_bins)
+
+    import dask
+
+    bins_d = dask.delayed(bins, pure=True)
+    shifts_d = dask.delayed(shifts, pure=True)
+    partial = dask.delayed(_partial, pure=True)
+    combine = dask.delayed(_combine, pure=True)
+    blocks = activity.to_delayed()
+    starts = np.concatenate([[0], np.cumsum(activity.chunks[0])[:-1]])
+    columns = []
+    for j in range(blocks.shape[1]):
+        parts = [partial(blocks[i, j], bins_d, int(starts[i]), shifts_d)
+                 for i in range(blocks.shape[0])]
+        while len(parts) > 1:
+            parts = [combine(parts[i:i + _SPLIT_EVERY])
+                     for i in range(0, len(parts), _SPLIT_EVERY)]
+        columns.append(parts[0])
+    results = [_finish(r, n_bins) for r in dask.compute(*columns)]
+    return BinSums(
+        sums=np.concatenate([r.sums for r in results], axis=2),
+        counts=results[0].counts,
+        amin=np.concatenate([r.amin for r in results]),
+        sumsq=np.concatenate([r.sumsq for r in results]),
+    )
+
+
+def compact(flat, n_total):
+    """Renumber the bins that occur in ``flat`` as 0..m-1, in order.
+
+    Returns ``(compact_bins, occupied)`` where ``occupied`` lists the original index of
+    each compact bin. Keeps accumulators as small as the visited (group, bin) pairs even
+    when the full grid (e.g. trials x bins) is large.
+    """
+    valid = flat >= 0
+    seen = np.zeros(n_total, bool)
+    seen[flat[valid]] = True
+    occupied = np.flatnonzero(seen)
+    index = np.full(n_total, -1, np.int64)
+    index[occupied] = np.arange(occupied.size)
+    out = np.full(flat.shape, -1, np.int64)
+    out[valid] = index[flat[valid]]
+    return out, occupied

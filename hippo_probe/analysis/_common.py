@@ -1,0 +1,179 @@
+"""What every analysis needs from a recording: checked access, provenance, NaN reasons."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import xarray as xr
+
+from .._validators import check_number, check_option, check_variables
+from .._version import __version__
+from .config import CONVENTIONS, SHUFFLE
+
+
+class AnalysisWarning(UserWarning):
+    """A result (or part of it) is NaN or approximate; the message says why."""
+
+
+def check_recording(rec, variables=(), *, why="", name="rec"):
+    """Check that ``rec`` is a recording (xarray Dataset) holding ``variables``."""
+    if not isinstance(rec, xr.Dataset):
+        raise TypeError(
+            f"`{name}` must be a recording (an xarray.Dataset, schema v1); "
+            f"got {type(rec).__name__}"
+        )
+    check_variables(name, rec, variables, why=why)
+    return rec
+
+
+def activity(rec) -> xr.DataArray:
+    """``rec.activity`` as (time, unit), still lazy if the recording is."""
+    act = rec["activity"]
+    if set(act.dims) != {"time", "unit"}:
+        raise ValueError(f"`rec.activity` must have dims ('time', 'unit'); got {act.dims}")
+    return act.transpose("time", "unit")
+
+
+def values(da) -> np.ndarray:
+    """A small per-sample variable as a numpy array (computes it if lazy)."""
+    return np.asarray(da.values if isinstance(da, xr.DataArray) else da)
+
+
+def sample_dt(rec) -> float:
+    """The recording's sample interval: ``attrs['dt']``, else the median time step."""
+    dt = rec.attrs.get("dt")
+    if dt is None or not np.isfinite(dt) or dt <= 0:
+        t = values(rec["time"])
+        if t.size < 2:
+            raise ValueError("`rec` must have attrs['dt'] or at least 2 samples to infer it")
+        dt = float(np.median(np.diff(t)))
+    return float(dt)
+
+
+def is_spike_data(rec) -> bool:
+    return rec.attrs.get("activity_kind") in CONVENTIONS.spike_kinds
+
+
+def rate_scale(rec) -> tuple[float, str, str]:
+    """Factor turning mean activity per sample into the map's unit, its units, long name.
+
+    Spike counts per sample become Hz (divide by ``dt``); other kinds are kept as the mean
+    activity per sample in the activity's own units.
+    """
+    act = rec["activity"]
+    if is_spike_data(rec):
+        return 1.0 / sample_dt(rec), "Hz", "firing rate"
+    name = act.attrs.get("long_name", "activity")
+    return 1.0, act.attrs.get("units", "1"), f"mean {name}"
+
+
+def nonnegative_offset(rec, amin) -> tuple[np.ndarray, str]:
+    """Per-unit offset subtracted to make activity a non-negative rate, and why.
+
+    Signed kinds (``CONVENTIONS.signed_kinds``, e.g. the LSTM's h) are shifted by each
+    unit's minimum over the recording. Other kinds are used as they are, unless they hold
+    negative values, which are shifted the same way with a warning.
+    """
+    amin = np.asarray(amin, float)
+    kind = rec.attrs.get("activity_kind")
+    if kind in CONVENTIONS.signed_kinds:
+        return amin, (f"activity_kind {kind!r} is signed: each unit's activity minus its "
+                      "minimum over the recording")
+    if np.any(amin < 0):
+        warnings.warn(
+            f"activity (kind {kind!r}) has negative values; each unit's activity minus its "
+            "minimum over the recording is used as a non-negative rate", AnalysisWarning,
+            stacklevel=3)
+        return np.minimum(amin, 0.0), ("negative values found: each unit's activity minus "
+                                       "its minimum over the recording (units with "
+                                       "min >= 0 unchanged)")
+    return np.zeros_like(amin), "none: activity is non-negative"
+
+
+def provenance(analysis: str, rec=None, **params) -> dict:
+    """attrs that say how a result was made."""
+    attrs = {"analysis": analysis, "hippo_probe_version": __version__}
+    if rec is not None:
+        for key in ("source", "activity_kind", "session_id", "task", "dt"):
+            if key in rec.attrs:
+                attrs[key] = rec.attrs[key]
+    for key, value in params.items():
+        attrs[key] = "None" if value is None else value
+    return attrs
+
+
+def report_nan(attrs: dict, labels, reasons, what: str):
+    """Record why entries are NaN (attrs['nan_reasons']) and warn once."""
+    reasons = {str(k): r for k, r in zip(labels, reasons) if r}
+    if not reasons:
+        return attrs
+    attrs = dict(attrs)
+    attrs["nan_reasons"] = reasons
+    sample = "; ".join(f"{k}: {r}" for k, r in list(reasons.items())[:3])
+    more = f" (and {len(reasons) - 3} more)" if len(reasons) > 3 else ""
+    warnings.warn(f"{what} is NaN for {len(reasons)} entries: {sample}{more}; "
+                  "see attrs['nan_reasons']", AnalysisWarning, stacklevel=3)
+    return attrs
+
+
+def group_codes(rec, by):
+    """Integer group of each sample for ``by`` in {None, 'environment', 'trial'}.
+
+    Returns ``(codes (time,), labels, dim)``; ``dim`` is None when ``by`` is None.
+    """
+    check_option("by", by, (None, "environment", "trial"))
+    n = rec.sizes["time"]
+    if by is None:
+        return np.zeros(n, np.int64), None, None
+    check_recording(rec, [by], why=f"by={by!r}")
+    raw = values(rec[by])
+    labels, codes = np.unique(raw, return_inverse=True)
+    return codes.astype(np.int64), labels, by
+
+
+def speed(rec) -> np.ndarray:
+    """Speed (m/s) of every sample: ``rec.speed`` if present, else from ``position``.
+
+    Derived speed is |p_t - p_{t-1}| / (t_t - t_{t-1}) within a trial (the first sample of
+    a trial takes its successor's value); NaN where position is NaN.
+    """
+    if "speed" in rec:
+        return values(rec["speed"]).astype(float)
+    pos = values(rec["position"].transpose("time", "space")).astype(float)
+    t = values(rec["time"]).astype(float)
+    trial = values(rec["trial"]) if "trial" in rec.coords or "trial" in rec else np.zeros(len(t))
+    step = np.full(len(t), np.nan)
+    if len(t) > 1:
+        step[1:] = np.linalg.norm(np.diff(pos, axis=0), axis=1) / np.diff(t)
+        first = np.r_[True, trial[1:] != trial[:-1]]
+        step[first] = np.r_[step[1:], np.nan][first]
+        step[first & np.r_[first[1:], True]] = np.nan  # one-sample trials: unknown
+    return step
+
+
+def circular_shifts(n: int, dt: float, n_shuffles: int, seed: int | None) -> np.ndarray:
+    """``n_shuffles`` random circular shifts (samples), at least ``SHUFFLE.min_shift`` s.
+
+    For recordings shorter than ``4 * min_shift`` the bound is a quarter of the duration.
+    """
+    n_shuffles = check_number("n_shuffles", n_shuffles, low=0, low_inclusive=True,
+                              integer=True)
+    low = int(round(SHUFFLE.min_shift / dt))
+    low = min(low, n // 4)
+    if n_shuffles and n - 2 * low < 1:
+        raise ValueError(f"`n_shuffles` needs a recording of at least 4 samples; got {n}")
+    rng = np.random.default_rng(SHUFFLE.seed if seed is None else seed)
+    return rng.integers(max(low, 1), n - max(low, 1) + 1, size=n_shuffles)
+
+
+def entry_labels(da) -> list[str]:
+    """A readable label for every entry of ``da`` (e.g. 'unit=3, environment=1')."""
+    names = list(da.dims)
+    index = [_common_coord(da, d) for d in names]
+    return [", ".join(f"{n}={index[k][i]}" for k, (n, i) in enumerate(zip(names, idx)))
+            for idx in np.ndindex(da.shape)]
+
+
+def _common_coord(da, dim):
+    return da[dim].values if dim in da.coords else np.arange(da.sizes[dim])

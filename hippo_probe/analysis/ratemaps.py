@@ -1,0 +1,326 @@
+"""Rate maps: occupancy-normalised mean activity per spatial bin."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+from scipy import ndimage
+
+from .._validators import check_number, check_shape
+from . import _common
+from ._binning import bin_sums, compact
+from ._common import AnalysisWarning
+from .config import RATEMAP
+
+
+@dataclass(frozen=True)
+class Grid:
+    """Square spatial bins covering ``extent = (x_min, x_max, y_min, y_max)``."""
+
+    extent: tuple
+    bin_size: float
+    nx: int
+    ny: int
+
+    @property
+    def x_edges(self):
+        return self.extent[0] + self.bin_size * np.arange(self.nx + 1)
+
+    @property
+    def y_edges(self):
+        return self.extent[2] + self.bin_size * np.arange(self.ny + 1)
+
+    @property
+    def x(self):
+        return self.x_edges[:-1] + self.bin_size / 2
+
+    @property
+    def y(self):
+        return self.y_edges[:-1] + self.bin_size / 2
+
+
+def _positions(rec) -> np.ndarray:
+    pos = rec["position"]
+    if "space" not in pos.dims or pos.sizes["space"] < 2:
+        raise ValueError(f"`rec.position` must have dims ('time', 'space') with space = "
+                         f"['x', 'y']; got dims {pos.dims}")
+    if "space" in pos.coords and {"x", "y"} <= set(map(str, pos["space"].values)):
+        pos = pos.sel(space=["x", "y"])
+    return _common.values(pos.transpose("time", "space")).astype(float)
+
+
+def _arena_vertices(rec):
+    """(environment ids, vertices (E, V, 2)) of the environments in ``rec``, or None."""
+    if "arena_vertices" not in rec:
+        return None
+    verts = rec["arena_vertices"]
+    ids = _common.values(verts["environment_id"]) if "environment_id" in verts.coords \
+        else np.arange(verts.shape[0])
+    if "environment" in rec.coords or "environment" in rec:
+        present = np.isin(ids, np.unique(_common.values(rec["environment"])))
+        if present.any():
+            ids, verts = ids[present], verts.isel(environment_id=np.flatnonzero(present))
+    return ids, _common.values(verts.transpose(..., "space")).astype(float)
+
+
+def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None) -> Grid:
+    """The bins of a recording's rate maps.
+
+    ``extent`` defaults to the bounding box of the recording's arenas
+    (``arena_vertices``) when known, else of its finite positions.
+    """
+    if extent is None:
+        arenas = _arena_vertices(rec)
+        if arenas is not None and np.isfinite(arenas[1]).any():
+            v = arenas[1].reshape(-1, 2)
+            extent = (np.nanmin(v[:, 0]), np.nanmax(v[:, 0]),
+                      np.nanmin(v[:, 1]), np.nanmax(v[:, 1]))
+        else:
+            pos = _positions(rec)
+            ok = np.isfinite(pos).all(axis=1)
+            if not ok.any():
+                raise ValueError("`rec.position` has no finite sample: cannot place bins "
+                                 "(all positions are NaN)")
+            lo, hi = pos[ok].min(axis=0), pos[ok].max(axis=0)
+            pad = RATEMAP.extent_margin * np.maximum(hi - lo, 1e-12)
+            extent = (lo[0] - pad[0], hi[0] + pad[0], lo[1] - pad[1], hi[1] + pad[1])
+    extent = tuple(float(e) for e in check_shape("extent", np.asarray(extent, float), (4,)))
+    width, height = extent[1] - extent[0], extent[3] - extent[2]
+    if not (np.isfinite(extent).all() and width > 0 and height > 0):
+        raise ValueError("`extent` must be finite (x_min, x_max, y_min, y_max) with "
+                         f"x_min < x_max and y_min < y_max; got {extent}")
+    if bin_size is None:
+        bin_size = max(width, height) / (n_bins or RATEMAP.n_bins)
+    bin_size = check_number("bin_size", bin_size, low=0)
+    if bin_size >= min(width, height):
+        raise ValueError(f"`bin_size` must be > 0 and smaller than the arena "
+                         f"({width:.3g} x {height:.3g} m); got {bin_size}")
+    nx = int(np.ceil(width / bin_size - 1e-9))
+    ny = int(np.ceil(height / bin_size - 1e-9))
+    return Grid(extent, bin_size, nx, ny)
+
+
+def position_bins(rec, grid: Grid, *, min_speed=None):
+    """Flat bin ``iy * nx + ix`` of every sample; -1 where it is not counted.
+
+    Returns ``(bins, counts)`` with ``counts`` the number of samples dropped for each
+    reason (position NaN, outside the extent, too slow).
+    """
+    pos = _positions(rec)
+    finite = np.isfinite(pos).all(axis=1)
+    if not finite.any():
+        raise ValueError("`rec.position` has no finite sample: cannot compute a spatial "
+                         "map (all positions are NaN)")
+    x0, x1, y0, y1 = grid.extent
+    with np.errstate(invalid="ignore"):
+        ix = np.floor((pos[:, 0] - x0) / grid.bin_size)
+        iy = np.floor((pos[:, 1] - y0) / grid.bin_size)
+        # a sample exactly on the far edge belongs to the last bin
+        ix[pos[:, 0] == x1] = grid.nx - 1
+        iy[pos[:, 1] == y1] = grid.ny - 1
+        inside = finite & (ix >= 0) & (ix < grid.nx) & (iy >= 0) & (iy < grid.ny)
+    keep = inside.copy()
+    dropped = {"position_nan": int((~finite).sum()),
+               "outside_extent": int((finite & ~inside).sum())}
+    if min_speed is not None:
+        check_number("min_speed", min_speed, low=0, low_inclusive=True)
+        with np.errstate(invalid="ignore"):
+            fast = _common.speed(rec) >= min_speed
+        dropped["below_min_speed"] = int((keep & ~fast).sum())
+        keep &= fast
+    bins = np.full(len(pos), -1, np.int64)
+    bins[keep] = (iy[keep] * grid.nx + ix[keep]).astype(np.int64)
+    return bins, dropped
+
+
+def smooth_normalized(sums, counts, sigma, n_axes=2, truncate=None):
+    """Normalized convolution over the last ``n_axes`` axes: smooth sums and occupancy,
+    then divide.
+
+    .. math:: \\hat\\lambda = \\frac{G_\\sigma * S}{G_\\sigma * N}
+
+    Bins outside the data (zero occupancy) contribute nothing, so edges and holes are not
+    pulled towards zero (Knutsson & Westin 1993). ``counts`` broadcasts against ``sums``.
+    """
+    truncate = RATEMAP.truncate if truncate is None else truncate
+    if sigma == 0:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return sums / counts
+
+    def smooth(a):
+        sig = [0.0] * (a.ndim - n_axes) + [sigma] * n_axes
+        return ndimage.gaussian_filter(np.asarray(a, float), sig, mode="constant",
+                                       truncate=truncate)
+
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return smooth(sums) / smooth(counts)
+
+
+def tuning_sums(rec, bins, groups, n_groups, n_bins, shifts=(0,)):
+    """Sums per (group, bin) for each shift: (K, U, G, n_bins) sums, (G, n_bins) counts.
+
+    Accumulates only the visited (group, bin) pairs, then scatters them onto the grid.
+    """
+    flat = np.where(bins >= 0, groups * n_bins + bins, -1)
+    small, occupied = compact(flat, n_groups * n_bins)
+    res = bin_sums(_common.activity(rec).data, small, len(occupied), shifts)
+    n_units = res.sums.shape[2]
+    sums = np.zeros((len(res.sums), n_groups * n_bins, n_units))
+    sums[:, occupied] = res.sums
+    counts = np.zeros(n_groups * n_bins, np.int64)
+    counts[occupied] = res.counts[0]
+    sums = sums.reshape(len(res.sums), n_groups, n_bins, n_units).transpose(0, 3, 1, 2)
+    return sums, counts.reshape(n_groups, n_bins), res
+
+
+def warn_nonfinite(rec, res, what):
+    """Warn (naming units) when activity holds NaN or inf: their sums are not finite."""
+    bad = ~np.isfinite(res.sums[0]).all(axis=0)
+    if bad.any():
+        units = _common.values(rec["unit"])[bad] if "unit" in rec.coords else np.flatnonzero(bad)
+        warnings.warn(f"`rec.activity` holds NaN or inf for units {list(units[:5])}"
+                      f"{' ...' if bad.sum() > 5 else ''}: their {what} are NaN in the "
+                      "bins where such samples fall", AnalysisWarning, stacklevel=3)
+
+
+def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent,
+                   shifts=(0,), n_bins=None):
+    """Everything a rate map (and its shuffles) is made of."""
+    _common.check_recording(rec, ["activity", "position"], why="rate maps")
+    sigma = check_number("sigma", RATEMAP.sigma if sigma is None else sigma, low=0,
+                         low_inclusive=True)
+    min_occupancy = check_number(
+        "min_occupancy", RATEMAP.min_occupancy if min_occupancy is None else min_occupancy,
+        low=0, low_inclusive=True)
+    grid = spatial_grid(rec, bin_size, extent, n_bins=n_bins)
+    bins, dropped = position_bins(rec, grid, min_speed=min_speed)
+    codes, labels, dim = _common.group_codes(rec, by)
+    n_groups = 1 if labels is None else len(labels)
+    n_valid = int((bins >= 0).sum())
+    if n_valid == 0:
+        raise ValueError(f"no sample left to map: {dropped} (of {len(bins)} samples)")
+    n_cells = grid.nx * grid.ny * n_groups
+    if n_valid < RATEMAP.few_samples_ratio * n_cells:
+        warnings.warn(f"only {n_valid} valid samples for {n_cells} bins: most bins are "
+                      "unvisited and NaN; use a larger `bin_size`", AnalysisWarning,
+                      stacklevel=3)
+    sums, counts, res = tuning_sums(rec, bins, codes, n_groups, grid.nx * grid.ny, shifts)
+    warn_nonfinite(rec, res, "rate maps")
+    dt = _common.sample_dt(rec)
+    shape = (grid.ny, grid.nx)
+    sums = sums.reshape(sums.shape[:3] + shape)
+    counts = counts.reshape((n_groups,) + shape)
+    maps = smooth_normalized(sums, counts, sigma)
+    maps[..., (counts == 0) | (counts * dt < min_occupancy)] = np.nan
+    return dict(maps=maps, counts=counts, res=res, grid=grid, dropped=dropped,
+                labels=labels, dim=dim, codes=codes, n_valid=n_valid, dt=dt,
+                sigma=sigma, min_occupancy=min_occupancy)
+
+
+def _maps_dataarray(rec, parts, maps, *, by, min_speed):
+    """Label rate-map arrays (U, G, ny, nx) as the public DataArray."""
+    grid, dim, labels, dt = parts["grid"], parts["dim"], parts["labels"], parts["dt"]
+    scale, units, long_name = _common.rate_scale(rec)
+    unit_coords = {name: c for name, c in rec["activity"].coords.items()
+                   if c.dims == ("unit",)}
+    coords = dict(unit_coords)
+    coords["y"] = ("y", grid.y, {"units": "m", "long_name": "y position"})
+    coords["x"] = ("x", grid.x, {"units": "m", "long_name": "x position"})
+    occ_dims = ("y", "x")
+    occ = parts["counts"] * dt
+    if dim is None:
+        data, occ = maps[:, 0], occ[0]
+        dims = ("unit", "y", "x")
+    else:
+        data = maps
+        dims = ("unit", dim, "y", "x")
+        occ_dims = (dim, "y", "x")
+        coords[dim] = (dim, labels, rec[dim].attrs)
+        if dim == "trial" and "environment" in rec:
+            env = _common.values(rec["environment"])
+            first = np.unique(parts["codes"], return_index=True)[1]
+            coords["environment"] = (dim, env[first], rec["environment"].attrs)
+    coords["occupancy"] = (occ_dims, occ, {"units": "s", "long_name": "occupancy"})
+    coords["activity_min"] = ("unit", parts["res"].amin * scale,
+                              {"units": units, "long_name": "minimum over the recording"})
+    attrs = _common.provenance(
+        "ratemaps", rec, bin_size=grid.bin_size, sigma=parts["sigma"],
+        sigma_units="bins", min_occupancy=parts["min_occupancy"], min_speed=min_speed,
+        by=by, extent=list(grid.extent), n_samples=parts["n_valid"],
+        samples_dropped=str(parts["dropped"]),
+        smoothing=("normalized convolution: Gaussian-smoothed activity sums over "
+                   "Gaussian-smoothed occupancy" if parts["sigma"] else "none"),
+        unvisited="NaN (occupancy 0 or below min_occupancy)",
+        units=units, long_name=long_name)
+    arenas = _arena_vertices(rec)
+    if arenas is not None:
+        attrs["arena_environment"] = arenas[0]
+        attrs["arena_vertices"] = arenas[1]
+    return xr.DataArray(data * scale, dims=dims, coords=coords, attrs=attrs,
+                        name="ratemap")
+
+
+def ratemaps(rec, *, bin_size=None, sigma=None, min_occupancy=None, min_speed=None,
+             by=None, extent=None):
+    """Occupancy-normalised mean activity of every unit in every spatial bin.
+
+    .. math:: \\lambda_{u,i} = \\frac{\\sum_{t: x_t \\in i} a_{u,t}}{N_i}
+
+    with :math:`N_i` the number of samples in bin :math:`i` (occupancy time
+    :math:`N_i\\,dt`). With smoothing, the activity sums and the occupancy are each
+    convolved with a Gaussian and then divided (normalized convolution), so unvisited
+    bins do not drag the map towards zero. Unvisited bins are NaN. Spike counts are
+    reported in Hz (divided by ``dt``); other activity keeps its units.
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        A recording (schema v1) with ``activity`` and ``position``; may be dask-backed
+        (the samples are streamed chunk by chunk, never loaded whole).
+    bin_size : float, optional
+        Side of the square bins in metres; default: the extent's longer side / 32.
+    sigma : float, optional
+        Gaussian smoothing width in bins (default 1; 0 = no smoothing).
+    min_occupancy : float, optional
+        Bins visited for less than this many seconds are NaN (default 0).
+    min_speed : float, optional
+        Only samples at or above this speed (m/s) count; speed is ``rec.speed`` or derived
+        from ``position`` within each trial.
+    by : {None, 'environment', 'trial'}
+        One map per environment or per trial (a grid shared by all) or one overall.
+    extent : (x_min, x_max, y_min, y_max), optional
+        Area covered by the bins; default: the arenas' bounding box when the recording has
+        ``arena_vertices``, else the finite positions'. Samples outside are not counted.
+
+    Returns
+    -------
+    xarray.DataArray
+        Dims (unit, [environment | trial], y, x); coords ``occupancy`` (seconds per bin)
+        and ``activity_min`` (each unit's minimum over the recording, used to make signed
+        activity non-negative); attrs give every parameter and the arena outlines.
+
+    References
+    ----------
+    Skaggs, McNaughton, Gothard & Markus (1993), An information-theoretic approach to
+    deciphering the hippocampal code, NIPS 5. Knutsson & Westin (1993), Normalized and
+    differential convolution, CVPR.
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> t = np.arange(2000) * 0.1
+    >>> xy = np.c_[np.cos(t / 7), np.sin(t / 5)]
+    >>> rec = xr.Dataset(
+    ...     {"activity": (("time", "unit"), np.exp(-((xy - 0.5) ** 2).sum(1, keepdims=True))),
+    ...      "position": (("time", "space"), xy)},
+    ...     coords={"time": t, "unit": [0], "space": ["x", "y"]}, attrs={"dt": 0.1})
+    >>> maps = ratemaps(rec, bin_size=0.25, sigma=0)
+    >>> maps.dims
+    ('unit', 'y', 'x')
+    """
+    parts = _ratemap_parts(rec, bin_size=bin_size, sigma=sigma, min_occupancy=min_occupancy,
+                           min_speed=min_speed, by=by, extent=extent)
+    return _maps_dataarray(rec, parts, parts["maps"][0], by=by, min_speed=min_speed)

@@ -8,11 +8,13 @@ accessor (``maps.hp.plot()``), registered by :mod:`hippo_probe.plot`.
 
 from .. import plot as _plot  # noqa: F401  (registers the ``.hp`` xarray accessor)
 from ._common import AnalysisWarning
+from .head_direction_tuning import head_direction_tuning
 from .ratemaps import ratemaps
 from .spatial_information import spatial_information
 
 __all__ = [
     "AnalysisWarning",
+    "head_direction_tuning",
     "ratemaps",
     "spatial_information",
 ]

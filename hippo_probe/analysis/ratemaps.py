@@ -136,14 +136,15 @@ def position_bins(rec, grid: Grid, *, min_speed=None):
     return bins, dropped
 
 
-def smooth_normalized(sums, counts, sigma, n_axes=2, truncate=None):
+def smooth_normalized(sums, counts, sigma, n_axes=2, truncate=None, mode="constant"):
     """Normalized convolution over the last ``n_axes`` axes: smooth sums and occupancy,
     then divide.
 
     .. math:: \\hat\\lambda = \\frac{G_\\sigma * S}{G_\\sigma * N}
 
     Bins outside the data (zero occupancy) contribute nothing, so edges and holes are not
-    pulled towards zero (Knutsson & Westin 1993). ``counts`` broadcasts against ``sums``.
+    pulled towards zero (Knutsson & Westin 1993). ``counts`` broadcasts against ``sums``;
+    ``mode="wrap"`` smooths circular variables (head direction).
     """
     truncate = RATEMAP.truncate if truncate is None else truncate
     if sigma == 0:
@@ -152,7 +153,7 @@ def smooth_normalized(sums, counts, sigma, n_axes=2, truncate=None):
 
     def smooth(a):
         sig = [0.0] * (a.ndim - n_axes) + [sigma] * n_axes
-        return ndimage.gaussian_filter(np.asarray(a, float), sig, mode="constant",
+        return ndimage.gaussian_filter(np.asarray(a, float), sig, mode=mode,
                                        truncate=truncate)
 
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -11,10 +11,12 @@ from ._common import AnalysisWarning
 from .head_direction_tuning import head_direction_tuning
 from .ratemaps import ratemaps
 from .spatial_information import spatial_information
+from .spatial_selectivity import spatial_selectivity
 
 __all__ = [
     "AnalysisWarning",
     "head_direction_tuning",
     "ratemaps",
     "spatial_information",
+    "spatial_selectivity",
 ]

@@ -26,7 +26,7 @@ _SPLIT_EVERY = 8
 
 
 @numba.njit(cache=True, nogil=True)
-def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq):
+def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_sq):
     """Add the samples of one time block to the accumulators (in place).
 
     activity : (m, U) block of samples ``t0 .. t0 + m`` of the recording
@@ -35,7 +35,7 @@ def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq):
     lo : compact bins are stored at ``index - lo`` (a block touches a narrow range)
     sums : (K, n_local, U) float64; counts : (K, n_local) int64
     amin : (U,) running minimum over all samples (valid or not)
-    sumsq : (U,) sum of squares over the samples valid in the unshifted bins
+    sumsq : (n_local, U) per-bin sum of squares (unshifted bins), if ``want_sq``
     """
     m, n_units = activity.shape
     n = bins.shape[0]
@@ -58,9 +58,10 @@ def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq):
             acc = sums[k, b]
             for u in range(n_units):
                 acc[u] += row[u]
-            if k == 0:
+            if want_sq and k == 0:
+                sq = sumsq[b]
                 for u in range(n_units):
-                    sumsq[u] += row[u] * row[u]
+                    sq[u] += row[u] * row[u]
 
 
 @dataclass
@@ -75,8 +76,8 @@ class BinSums:
         Number of samples in each bin (identical for every shift of a permutation).
     amin : ndarray (U,)
         Each unit's minimum activity over every sample of the recording.
-    sumsq : ndarray (U,)
-        Each unit's sum of squared activity over the samples counted (unshifted).
+    sumsq : ndarray (n_bins, U) or None
+        Sum of squared activity over the samples of each bin (unshifted), if asked.
     """
 
     sums: np.ndarray
@@ -99,7 +100,7 @@ def _block_range(bins, shifts, t0, t1):
     return (0, -1) if hi < 0 else (lo, hi)
 
 
-def _partial(block, bins, t0, shifts):
+def _partial(block, bins, t0, shifts, want_sq):
     """Reduce one (time, unit) block to (lo, sums, counts, amin, sumsq)."""
     block = np.ascontiguousarray(block)
     n_units = block.shape[1]
@@ -108,10 +109,10 @@ def _partial(block, bins, t0, shifts):
     sums = np.zeros((len(shifts), width, n_units))
     counts = np.zeros((len(shifts), width), np.int64)
     amin = np.full(n_units, np.inf)
-    sumsq = np.zeros(n_units)
+    sumsq = np.zeros((width if want_sq else 0, n_units))
     if block.dtype.kind not in "fiu" or block.dtype == np.float16:
         block = block.astype(np.float64)
-    _accumulate(block, bins, t0, shifts, lo, sums, counts, amin, sumsq)
+    _accumulate(block, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_sq)
     return lo, sums, counts, amin, sumsq
 
 
@@ -124,13 +125,15 @@ def _combine(parts):
     sums = np.zeros((k, hi - lo, n_units))
     counts = np.zeros((k, hi - lo), np.int64)
     amin = np.full(n_units, np.inf)
-    sumsq = np.zeros(n_units)
+    want_sq = any(p[4].shape[0] for p in parts)
+    sumsq = np.zeros((hi - lo if want_sq else 0, n_units))
     for p_lo, p_sums, p_counts, p_amin, p_sumsq in parts:
         sl = slice(p_lo - lo, p_lo - lo + p_sums.shape[1])
         sums[:, sl] += p_sums
         counts[:, sl] += p_counts
         np.minimum(amin, p_amin, out=amin)
-        sumsq += p_sumsq
+        if p_sumsq.shape[0]:
+            sumsq[sl] += p_sumsq
     return lo, sums, counts, amin, sumsq
 
 
@@ -141,10 +144,14 @@ def _finish(part, n_bins):
     full_counts = np.zeros((k, n_bins), np.int64)
     full_sums[:, lo:lo + width] = sums
     full_counts[:, lo:lo + width] = counts
-    return BinSums(full_sums, full_counts, amin, sumsq)
+    full_sq = None
+    if sumsq.shape[0]:
+        full_sq = np.zeros((n_bins, n_units))
+        full_sq[lo:lo + width] = sumsq
+    return BinSums(full_sums, full_counts, amin, full_sq)
 
 
-def bin_sums(activity, bins, n_bins, shifts=(0,)):
+def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False):
     """Per-bin sample counts and activity sums, in one pass over the samples.
 
     .. math:: S_{k,b,u} = \\sum_{t:\\, bins[t - s_k] = b} a_{t,u}, \\qquad
@@ -160,6 +167,8 @@ def bin_sums(activity, bins, n_bins, shifts=(0,)):
         Number of bins.
     shifts : sequence of int
         Circular shifts (in samples) of ``bins`` against ``activity``; 0 = no shift.
+    want_sq : bool
+        Also sum the squared activity per bin (unshifted).
 
     Returns
     -------
@@ -168,7 +177,7 @@ def bin_sums(activity, bins, n_bins, shifts=(0,)):
     bins = np.ascontiguousarray(bins, dtype=np.int64)
     shifts = np.asarray(shifts, dtype=np.int64) % max(len(bins), 1)
     if not hasattr(activity, "dask"):
-        return _finish(_partial(np.asarray(activity), bins, 0, shifts), n_bins)
+        return _finish(_partial(np.asarray(activity), bins, 0, shifts, want_sq), n_bins)
 
     import dask
 
@@ -180,7 +189,7 @@ def bin_sums(activity, bins, n_bins, shifts=(0,)):
     starts = np.concatenate([[0], np.cumsum(activity.chunks[0])[:-1]])
     columns = []
     for j in range(blocks.shape[1]):
-        parts = [partial(blocks[i, j], bins_d, int(starts[i]), shifts_d)
+        parts = [partial(blocks[i, j], bins_d, int(starts[i]), shifts_d, want_sq)
                  for i in range(blocks.shape[0])]
         while len(parts) > 1:
             parts = [combine(parts[i:i + _SPLIT_EVERY])
@@ -191,7 +200,7 @@ def bin_sums(activity, bins, n_bins, shifts=(0,)):
         sums=np.concatenate([r.sums for r in results], axis=2),
         counts=results[0].counts,
         amin=np.concatenate([r.amin for r in results]),
-        sumsq=np.concatenate([r.sumsq for r in results]),
+        sumsq=None if not want_sq else np.concatenate([r.sumsq for r in results], axis=1),
     )
 
 

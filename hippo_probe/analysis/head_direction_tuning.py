@@ -131,7 +131,8 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     codes, labels, dim = _common.group_codes(rec, by)
     n_groups = 1 if labels is None else len(labels)
     shifts = np.r_[0, _common.circular_shifts(rec.sizes["time"], dt, n_shuffles, seed)]
-    sums, counts, res = tuning_sums(rec, bins, codes, n_groups, n_bins, shifts)
+    res = tuning_sums(rec, bins, codes, n_groups, n_bins, shifts)
+    sums, counts = res.sums, res.counts
     warn_nonfinite(rec, res, "tuning curves")
     curves = smooth_normalized(sums, counts, sigma, n_axes=1, mode="wrap")
     curves[..., counts == 0] = np.nan

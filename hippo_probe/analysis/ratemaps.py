@@ -11,7 +11,7 @@ from scipy import ndimage
 
 from .._validators import check_number, check_shape
 from . import _common
-from ._binning import bin_sums, compact
+from ._binning import BinSums, bin_sums, compact
 from ._common import AnalysisWarning
 from .config import RATEMAP
 
@@ -42,14 +42,17 @@ class Grid:
         return self.y_edges[:-1] + self.bin_size / 2
 
 
-def _positions(rec) -> np.ndarray:
+def _positions(rec):
+    """``(x, y)`` of every sample as two contiguous float64 arrays."""
     pos = rec["position"]
     if "space" not in pos.dims or pos.sizes["space"] < 2:
         raise ValueError(f"`rec.position` must have dims ('time', 'space') with space = "
                          f"['x', 'y']; got dims {pos.dims}")
     if "space" in pos.coords and {"x", "y"} <= set(map(str, pos["space"].values)):
         pos = pos.sel(space=["x", "y"])
-    return _common.values(pos.transpose("time", "space")).astype(float)
+    pos = _common.values(pos.transpose("space", "time"))
+    return (np.ascontiguousarray(pos[0], dtype=np.float64),
+            np.ascontiguousarray(pos[1], dtype=np.float64))
 
 
 def _arena_vertices(rec):
@@ -66,11 +69,12 @@ def _arena_vertices(rec):
     return ids, _common.values(verts.transpose(..., "space")).astype(float)
 
 
-def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None) -> Grid:
+def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None, xy=None) -> Grid:
     """The bins of a recording's rate maps.
 
     ``extent`` defaults to the bounding box of the recording's arenas
-    (``arena_vertices``) when known, else of its finite positions.
+    (``arena_vertices``) when known, else of its finite positions (``xy``, if already
+    read, saves reading them again).
     """
     if extent is None:
         arenas = _arena_vertices(rec)
@@ -79,12 +83,12 @@ def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None) -> Grid:
             extent = (np.nanmin(v[:, 0]), np.nanmax(v[:, 0]),
                       np.nanmin(v[:, 1]), np.nanmax(v[:, 1]))
         else:
-            pos = _positions(rec)
-            ok = np.isfinite(pos).all(axis=1)
-            if not ok.any():
+            x, y = _positions(rec) if xy is None else xy
+            lo = np.array([np.fmin.reduce(x), np.fmin.reduce(y)])  # fmin skips NaN
+            hi = np.array([np.fmax.reduce(x), np.fmax.reduce(y)])
+            if not np.isfinite(np.r_[lo, hi]).all():
                 raise ValueError("`rec.position` has no finite sample: cannot place bins "
                                  "(all positions are NaN)")
-            lo, hi = pos[ok].min(axis=0), pos[ok].max(axis=0)
             pad = RATEMAP.extent_margin * np.maximum(hi - lo, 1e-12)
             extent = (lo[0] - pad[0], hi[0] + pad[0], lo[1] - pad[1], hi[1] + pad[1])
     extent = tuple(float(e) for e in check_shape("extent", np.asarray(extent, float), (4,)))
@@ -103,24 +107,24 @@ def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None) -> Grid:
     return Grid(extent, bin_size, nx, ny)
 
 
-def position_bins(rec, grid: Grid, *, min_speed=None):
+def position_bins(rec, grid: Grid, *, min_speed=None, xy=None):
     """Flat bin ``iy * nx + ix`` of every sample; -1 where it is not counted.
 
     Returns ``(bins, counts)`` with ``counts`` the number of samples dropped for each
     reason (position NaN, outside the extent, too slow).
     """
-    pos = _positions(rec)
-    finite = np.isfinite(pos).all(axis=1)
+    x, y = _positions(rec) if xy is None else xy
+    finite = np.isfinite(x) & np.isfinite(y)
     if not finite.any():
         raise ValueError("`rec.position` has no finite sample: cannot compute a spatial "
                          "map (all positions are NaN)")
     x0, x1, y0, y1 = grid.extent
     with np.errstate(invalid="ignore"):
-        ix = np.floor((pos[:, 0] - x0) / grid.bin_size)
-        iy = np.floor((pos[:, 1] - y0) / grid.bin_size)
+        ix = np.floor((x - x0) / grid.bin_size)
+        iy = np.floor((y - y0) / grid.bin_size)
         # a sample exactly on the far edge belongs to the last bin
-        ix[pos[:, 0] == x1] = grid.nx - 1
-        iy[pos[:, 1] == y1] = grid.ny - 1
+        ix[x == x1] = grid.nx - 1
+        iy[y == y1] = grid.ny - 1
         inside = finite & (ix >= 0) & (ix < grid.nx) & (iy >= 0) & (iy < grid.ny)
     keep = inside.copy()
     dropped = {"position_nan": int((~finite).sum()),
@@ -131,7 +135,7 @@ def position_bins(rec, grid: Grid, *, min_speed=None):
             fast = _common.speed(rec) >= min_speed
         dropped["below_min_speed"] = int((keep & ~fast).sum())
         keep &= fast
-    bins = np.full(len(pos), -1, np.int64)
+    bins = np.full(len(x), -1, np.int64)
     bins[keep] = (iy[keep] * grid.nx + ix[keep]).astype(np.int64)
     return bins, dropped
 
@@ -160,26 +164,33 @@ def smooth_normalized(sums, counts, sigma, n_axes=2, truncate=None, mode="consta
         return smooth(sums) / smooth(counts)
 
 
-def tuning_sums(rec, bins, groups, n_groups, n_bins, shifts=(0,)):
-    """Sums per (group, bin) for each shift: (K, U, G, n_bins) sums, (G, n_bins) counts.
+def tuning_sums(rec, bins, groups, n_groups, n_bins, shifts=(0,), want_sq=False):
+    """Sums per (group, bin) for each shift, as a :class:`BinSums` on the full grid.
 
-    Accumulates only the visited (group, bin) pairs, then scatters them onto the grid.
+    ``sums`` is (K, U, G, n_bins), ``counts`` (G, n_bins), ``sumsq`` (U, G, n_bins) or
+    None. Only the visited (group, bin) pairs are accumulated, then scattered onto the
+    grid, so accumulators stay small even for many groups.
     """
     flat = np.where(bins >= 0, groups * n_bins + bins, -1)
     small, occupied = compact(flat, n_groups * n_bins)
-    res = bin_sums(_common.activity(rec).data, small, len(occupied), shifts)
-    n_units = res.sums.shape[2]
-    sums = np.zeros((len(res.sums), n_groups * n_bins, n_units))
-    sums[:, occupied] = res.sums
+    res = bin_sums(_common.activity(rec).data, small, len(occupied), shifts, want_sq)
+    n_shifts, _, n_units = res.sums.shape
+
+    def grid(a):  # (..., n_occupied, U) -> (..., U, G, n_bins)
+        full = np.zeros(a.shape[:-2] + (n_groups * n_bins, n_units))
+        full[..., occupied, :] = a
+        full = full.reshape(a.shape[:-2] + (n_groups, n_bins, n_units))
+        return np.moveaxis(full, -1, -3)
+
     counts = np.zeros(n_groups * n_bins, np.int64)
     counts[occupied] = res.counts[0]
-    sums = sums.reshape(len(res.sums), n_groups, n_bins, n_units).transpose(0, 3, 1, 2)
-    return sums, counts.reshape(n_groups, n_bins), res
+    return BinSums(sums=grid(res.sums), counts=counts.reshape(n_groups, n_bins),
+                   amin=res.amin, sumsq=None if res.sumsq is None else grid(res.sumsq))
 
 
 def warn_nonfinite(rec, res, what):
     """Warn (naming units) when activity holds NaN or inf: their sums are not finite."""
-    bad = ~np.isfinite(res.sums[0]).all(axis=0)
+    bad = ~np.isfinite(res.sums[0]).reshape(res.sums.shape[1], -1).all(axis=1)
     if bad.any():
         units = _common.values(rec["unit"])[bad] if "unit" in rec.coords else np.flatnonzero(bad)
         warnings.warn(f"`rec.activity` holds NaN or inf for units {list(units[:5])}"
@@ -188,7 +199,7 @@ def warn_nonfinite(rec, res, what):
 
 
 def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent,
-                   shifts=(0,), n_bins=None):
+                   shifts=(0,), n_bins=None, want_sq=False):
     """Everything a rate map (and its shuffles) is made of."""
     _common.check_recording(rec, ["activity", "position"], why="rate maps")
     sigma = check_number("sigma", RATEMAP.sigma if sigma is None else sigma, low=0,
@@ -196,8 +207,9 @@ def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent
     min_occupancy = check_number(
         "min_occupancy", RATEMAP.min_occupancy if min_occupancy is None else min_occupancy,
         low=0, low_inclusive=True)
-    grid = spatial_grid(rec, bin_size, extent, n_bins=n_bins)
-    bins, dropped = position_bins(rec, grid, min_speed=min_speed)
+    xy = _positions(rec)
+    grid = spatial_grid(rec, bin_size, extent, n_bins=n_bins, xy=xy)
+    bins, dropped = position_bins(rec, grid, min_speed=min_speed, xy=xy)
     codes, labels, dim = _common.group_codes(rec, by)
     n_groups = 1 if labels is None else len(labels)
     n_valid = int((bins >= 0).sum())
@@ -208,15 +220,15 @@ def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent
         warnings.warn(f"only {n_valid} valid samples for {n_cells} bins: most bins are "
                       "unvisited and NaN; use a larger `bin_size`", AnalysisWarning,
                       stacklevel=3)
-    sums, counts, res = tuning_sums(rec, bins, codes, n_groups, grid.nx * grid.ny, shifts)
+    res = tuning_sums(rec, bins, codes, n_groups, grid.nx * grid.ny, shifts, want_sq)
     warn_nonfinite(rec, res, "rate maps")
     dt = _common.sample_dt(rec)
     shape = (grid.ny, grid.nx)
-    sums = sums.reshape(sums.shape[:3] + shape)
-    counts = counts.reshape((n_groups,) + shape)
+    sums = res.sums.reshape(res.sums.shape[:3] + shape)
+    counts = res.counts.reshape((n_groups,) + shape)
     maps = smooth_normalized(sums, counts, sigma)
     maps[..., (counts == 0) | (counts * dt < min_occupancy)] = np.nan
-    return dict(maps=maps, counts=counts, res=res, grid=grid, dropped=dropped,
+    return dict(maps=maps, counts=counts, res=res, sums=sums, grid=grid, dropped=dropped,
                 labels=labels, dim=dim, codes=codes, n_valid=n_valid, dt=dt,
                 sigma=sigma, min_occupancy=min_occupancy)
 

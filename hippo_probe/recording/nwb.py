@@ -1,9 +1,661 @@
-"""NWB import and export (pynwb imported when called)."""
+"""NWB import (``from_nwb``) and export (``to_nwb``); pynwb is imported when called.
+
+NWB (Neurodata Without Borders, Rübel et al. 2022, eLife 11:e78362) is the community
+format for rodent electrophysiology. The import maps an NWB session onto the recording
+schema: tracking samples become ``time``, ``Units`` spike times are binned onto them,
+epochs and trials become the trial table, ``Units`` columns become unit coords.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import uuid
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from .._validators import check_option
+from .._version import __version__
+from ..errors import RecordingError
+from .arrays import LENGTH_UNITS, bin_spikes, check_time, wrap_angle
+from .config import DEFAULTS
+from .layout import assemble, trial_blocks
+from .schema import VARIABLES, annotate
+from .validate import _v, validate
+
+#: NWB ``unit`` strings of lengths -> the keys of :data:`LENGTH_UNITS`.
+NWB_LENGTH_UNITS = {
+    "m": "m", "meter": "m", "meters": "m", "metre": "m", "metres": "m",
+    "cm": "cm", "centimeter": "cm", "centimeters": "cm", "centimetre": "cm",
+    "centimetres": "cm", "mm": "mm", "millimeter": "mm", "millimeters": "mm",
+    "millimetre": "mm", "millimetres": "mm",
+}
+#: Radians per unit of the NWB angle units understood.
+NWB_ANGLE_UNITS = {"radian": 1.0, "radians": 1.0, "rad": 1.0, "degree": np.pi / 180,
+                   "degrees": np.pi / 180, "deg": np.pi / 180}
+#: Units-table columns that are not per-unit labels.
+_NOT_UNIT_COORDS = {"spike_times", "obs_intervals", "electrodes", "waveform_mean",
+                    "waveform_sd", "waveforms"}
+#: NWB processing module where ``to_nwb`` puts what has no standard NWB type.
+MODULE = "hippo_probe"
+#: Intervals table of the tracked time support (pynapple's name for it).
+SUPPORT = "position_time_support"
+_ATTRS_NOTE = "hippo_probe recording attrs: "
 
 
-def from_nwb(path, epoch="wake", **options):
-    raise NotImplementedError("from_nwb is being written")
+def _nwb_classes():
+    try:
+        import pynwb
+        from pynwb.behavior import CompassDirection, Position, SpatialSeries
+    except ImportError as err:   # pragma: no cover - pynwb is a declared extra
+        raise ImportError("NWB import/export needs pynwb: pip install 'hippo_probe[nwb]'") \
+            from err
+    return pynwb, Position, CompassDirection, SpatialSeries
 
 
-def to_nwb(rec, path, **options):
-    raise NotImplementedError("to_nwb is being written")
+def _containers(nwb, cls):
+    """(location, object) of every ``cls`` under processing modules and acquisition."""
+    found = []
+    for mod_name, module in nwb.processing.items():
+        found += [(f"processing/{mod_name}/{k}", v) for k, v in module.data_interfaces.items()
+                  if isinstance(v, cls)]
+    found += [(f"acquisition/{k}", v) for k, v in nwb.acquisition.items() if isinstance(v, cls)]
+    return found
+
+
+def _pick(found, name, what, path):
+    if not found:
+        raise RecordingError(f"`path` has no {what} (looked in processing/* and "
+                             f"acquisition): {path}")
+    if name is None:
+        return found[0]
+    for location, obj in found:
+        if name in (location, location.rsplit("/", 1)[-1]):
+            return location, obj
+    raise RecordingError(f"`{what.split()[0].lower()}` must name one of "
+                         f"{[loc for loc, _ in found]}; got {name!r}")
+
+
+def _timestamps(series):
+    if series.timestamps is not None:
+        return np.asarray(series.timestamps[:], dtype=float)
+    n = series.data.shape[0]
+    return series.starting_time + np.arange(n) / series.rate
+
+
+def _values(series):
+    """Series data in its file units times ``conversion`` plus ``offset``."""
+    data = np.asarray(series.data[:], dtype=float)
+    return data * series.conversion + getattr(series, "offset", 0.0)
+
+
+def _axes_table(series_by_name):
+    """Axis name -> (series, column): 1-D series by name; the columns of a lone 2-D series
+    as "x", "y", "z"; columns of several 2-D series as "name[j]"."""
+    table = {}
+    alone = len(series_by_name) == 1
+    for name, series in series_by_name.items():
+        if series.data.ndim == 1:
+            table[name] = (series, None)
+            continue
+        for j in range(series.data.shape[1]):
+            label = ("xyz"[j] if series.data.shape[1] <= 3 else str(j)) if alone else f"{name}[{j}]"
+            table[label] = (series, j)
+    return table
+
+
+def _column(entry):
+    series, j = entry
+    values = _values(series)
+    return values if j is None else values[:, j]
+
+
+def _read_position(nwb, name, floor_axes, position_units, path):
+    _, Position, _, SpatialSeries = _nwb_classes()
+    location, container = _pick(_containers(nwb, Position) + _containers(nwb, SpatialSeries),
+                                name, "Position (SpatialSeries) data", path)
+    axes = _axes_table({container.name: container} if isinstance(container, SpatialSeries)
+                       else container.spatial_series)
+    columns = {axis: _column(entry) for axis, entry in axes.items()}
+    if floor_axes is None:      # the vertical axis of a floor-bound animal barely moves
+        spread = {axis: np.nanstd(v) for axis, v in columns.items()}
+        floor_axes = tuple(sorted(sorted(spread, key=spread.get)[-2:], key=list(axes).index))
+    floor_axes = tuple(floor_axes)
+    for axis in floor_axes:
+        check_option("floor_axes", axis, list(axes))
+    if len(floor_axes) != 2 or floor_axes[0] == floor_axes[1]:
+        raise ValueError(f"`floor_axes` must name two different axes of {list(axes)}; "
+                         f"got {floor_axes!r}")
+    first = axes[floor_axes[0]][0]
+    time = _timestamps(first)
+    for axis in floor_axes:
+        if axes[axis][0] is not first and not np.array_equal(_timestamps(axes[axis][0]), time):
+            raise RecordingError(f"position axes {floor_axes} have different timestamps in "
+                                 f"{location}")
+    unit = position_units or NWB_LENGTH_UNITS.get(str(first.unit).strip().lower())
+    if unit is None:
+        unit = "m"   # an empty or unknown unit field; values are then taken as metres
+    xy = np.column_stack([columns[a] for a in floor_axes]) * LENGTH_UNITS[
+        check_option("position_units", unit, LENGTH_UNITS)]
+    return time, xy, {"nwb_position": location, "nwb_floor_axes": list(floor_axes),
+                      "nwb_position_units": unit}
+
+
+def _read_head_direction(nwb, name, floor_axes, sign, time, path):
+    _, _, CompassDirection, _ = _nwb_classes()
+    found = _containers(nwb, CompassDirection)
+    if not found and name is None:
+        return None, {}
+    location, container = _pick(found, name if name is None or "/" in name else None,
+                                "CompassDirection data", path)
+    axes = _axes_table(container.spatial_series)
+    vertical = [a for a in "xyz" if a not in floor_axes]
+    if name is not None and "/" not in name:
+        key = name
+    elif len(axes) == 1:
+        key = next(iter(axes))
+    elif len(vertical) == 1 and f"r{vertical[0]}" in axes:
+        key = f"r{vertical[0]}"       # rotation about the vertical axis
+    else:
+        raise RecordingError(f"`head_direction` must name one of {list(axes)} in {location} "
+                             "(cannot tell which is the rotation about the vertical)")
+    check_option("head_direction", key, list(axes))
+    series = axes[key][0]
+    scale = NWB_ANGLE_UNITS.get(str(series.unit).strip().lower(), 1.0)
+    if sign == "auto":
+        # Right-handed rotation about the vertical c turns the floor axis a toward b when
+        # (a, b, c) is a cyclic order of (x, y, z); otherwise the counter-clockwise angle
+        # in the (a, b) floor is the negative of the stored rotation.
+        order = "".join(floor_axes) + "".join(vertical)
+        sign = 1 if len(order) != 3 or order in ("xyz", "yzx", "zxy") else -1
+    check_option("head_direction_sign", sign, (1, -1))
+    angle = _column(axes[key]) * scale * sign
+    hd_time = _timestamps(series)
+    if hd_time.size != time.size or not np.allclose(hd_time, time, atol=1e-9, rtol=0):
+        # different clock: interpolate the unit vector, so wrap-around is handled
+        angle = np.arctan2(np.interp(time, hd_time, np.sin(angle), left=np.nan, right=np.nan),
+                           np.interp(time, hd_time, np.cos(angle), left=np.nan, right=np.nan))
+    return wrap_angle(angle), {"nwb_head_direction": f"{location}/{key}",
+                               "nwb_head_direction_sign": int(sign)}
+
+
+def _intervals(table):
+    """(ids, starts, stops) of the rows of an NWB TimeIntervals table."""
+    if table is None or len(table) == 0:
+        return None
+    return (np.asarray(table.id[:]), np.asarray(table["start_time"][:], dtype=float),
+            np.asarray(table["stop_time"][:], dtype=float))
+
+
+def _epoch_rows(nwb, epoch, path):
+    if epoch is None:
+        return None
+    table = nwb.epochs
+    names = []
+    if table is not None and len(table):
+        if "tags" in table.colnames:
+            names = [list(map(str, tags)) for tags in table["tags"][:]]
+        else:
+            names = [[str(i)] for i in table.id[:]]
+    keep = np.array([epoch in tags for tags in names], dtype=bool)
+    if not keep.any():
+        known = sorted({t for tags in names for t in tags})
+        raise RecordingError(f"`epoch` must be one of the epochs of the file {known}; got "
+                             f"{epoch!r}")
+    ids, starts, stops = _intervals(table)
+    return ids[keep], starts[keep], stops[keep]
+
+
+def _trial_intervals(nwb, epoch_rows, trials, support):
+    """Trial ids and intervals: NWB trials inside the epoch(s), or the epochs themselves."""
+    use_trials = trials is True or (trials == "auto" and nwb.trials is not None
+                                    and len(nwb.trials) > 0)
+    if use_trials:
+        if nwb.trials is None or len(nwb.trials) == 0:
+            raise RecordingError("`trials` is True but the file has no trials table")
+        ids, starts, stops = _intervals(nwb.trials)
+        if epoch_rows is not None:
+            inside = np.zeros(ids.size, dtype=bool)
+            for a, b in zip(epoch_rows[1], epoch_rows[2]):
+                inside |= (starts >= a) & (stops <= b)
+            ids, starts, stops = ids[inside], starts[inside], stops[inside]
+    elif epoch_rows is not None:
+        ids, starts, stops = epoch_rows
+    else:
+        ids, starts, stops = np.array([0]), support[0][:1], support[1][-1:]
+    starts, stops = _clip_to_support(starts, stops, *support)
+    order = np.argsort(starts, kind="stable")
+    ids, starts, stops = ids[order], starts[order], stops[order]
+    keep = stops >= starts
+    return ids[keep], starts[keep], stops[keep], use_trials
+
+
+def _support(nwb, time):
+    """Intervals where tracking is defined: the file's ``position_time_support`` table
+    (pynapple's convention, also written by :func:`to_nwb`) or [first, last sample]."""
+    table = nwb.intervals.get(SUPPORT) if nwb.intervals else None
+    rows = _intervals(table)
+    if rows is None:
+        return np.array([time[0]]), np.array([time[-1]])
+    order = np.argsort(rows[1])
+    return rows[1][order], rows[2][order]
+
+
+def _clip_to_support(starts, stops, support_starts, support_stops):
+    """Shrink each interval to the hull of its overlap with the support intervals."""
+    first = np.searchsorted(support_stops, starts, side="left")     # first support ending >= start
+    last = np.searchsorted(support_starts, stops, side="right") - 1  # last support starting <= stop
+    valid = (first < support_starts.size) & (last >= 0) & (first <= last)
+    first, last = first.clip(0, support_starts.size - 1), last.clip(0, support_starts.size - 1)
+    new_starts = np.where(valid, np.maximum(starts, support_starts[first]), np.inf)
+    new_stops = np.where(valid, np.minimum(stops, support_stops[last]), -np.inf)
+    return new_starts, new_stops
+
+
+def _assign_samples(time, ids, starts, stops, dt, config):
+    """Trial of each sample (-1 outside every trial), leaving the schema's gap between
+    trials that touch (the first samples of the later trial are left out)."""
+    trial = np.full(time.size, -1, dtype=np.int64)
+    for k in range(ids.size):
+        lo, hi = np.searchsorted(time, [starts[k], stops[k]], side="left")
+        hi = np.searchsorted(time, stops[k], side="right")
+        inside = np.arange(lo, hi)
+        inside = inside[trial[inside] == -1]
+        trial[inside] = k
+    for k in range(1, ids.size):
+        prev = np.flatnonzero(trial == k - 1)
+        if prev.size == 0:
+            continue
+        mine = np.flatnonzero(trial == k)
+        too_close = mine[time[mine] - time[prev[-1]] < 2 * dt * (1 - config.gap_jitter)]
+        trial[too_close] = -1
+    return trial
+
+
+def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_direction=None,
+             head_direction_sign="auto", position=None, position_units=None,
+             environment=0, activity="auto", config=DEFAULTS):
+    """Import an NWB session as a recording (needs pynwb).
+
+    Position comes from a ``Position`` (or ``SpatialSeries``) under ``processing/*`` or
+    ``acquisition``, scaled by its ``conversion`` (and ``offset``) and converted to
+    metres; two of its axes form the floor plane. Head direction comes from a
+    ``CompassDirection`` (by default the rotation about the vertical axis), with a sign
+    chosen so that it is counter-clockwise from the first floor axis toward the second.
+    Spike times of the ``Units`` table are binned onto the tracking samples
+    (:func:`~hippo_probe.recording.bin_spikes`: nearest sample within a trial's interval),
+    so the counts add up to the spikes inside the trials. Trials are the rows of the
+    file's trials table inside the epoch, or else the epoch's rows, intersected with the
+    tracked time support ``[first, last tracking sample]``. ``Units`` columns (e.g.
+    ``location``, renamed ``region``) become unit coords.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.nwb`` file.
+    epoch : str or None
+        Tag (``epochs`` table, column ``tags``) of the epoch(s) to import, e.g.
+        ``"wake"``; ``None`` imports the whole tracked time.
+    trials : "auto", bool
+        Split the epoch by the file's trials table (``"auto"``: when there is one).
+        Where two trials touch, the first samples of the later one are left out so that
+        trials are separated by one ``dt`` (the schema's gap); their spikes still count,
+        on the trial's first kept sample.
+    floor_axes : pair of str, optional
+        Axes forming the floor, mapped to the recording's (x, y): names of 1-D series of
+        the Position container (``("x", "z")``), or ``"x"``, ``"y"``, ``"z"`` for the
+        columns of a single 2-D series. Default: the two axes with the largest spread
+        (the vertical axis of a floor-bound animal barely moves).
+    head_direction : str, optional
+        Name of the CompassDirection series (or axis) to use; default: the only one, or
+        ``"r" + vertical axis`` (e.g. ``"ry"`` when the floor is (x, z)).
+    head_direction_sign : "auto", 1 or -1
+        ``-1`` negates the stored angle. ``"auto"``: ``+1`` when (floor axes, vertical)
+        is a right-handed (cyclic) order of x, y, z, else ``-1`` (a right-handed rotation
+        about y turns z toward x, i.e. clockwise in the (x, z) floor).
+    position : str, optional
+        Name or location of the Position container (default: the first found).
+    position_units : {"m", "cm", "mm"}, optional
+        Override the series' ``unit`` (used when the field is empty or wrong; an empty
+        field is read as metres).
+    environment : int or str
+        Environment id of every trial, or the name of an integer column of the trials
+        table.
+    activity : "auto", "units" or "series"
+        Where activity comes from: the ``Units`` table (spike counts) or the
+        ``processing/hippo_probe/activity`` TimeSeries that :func:`to_nwb` writes
+        (``"auto"``: the series when present).
+    config : RecordingConfig
+        Validation tolerances (gap between touching trials).
+
+    Returns
+    -------
+    xarray.Dataset
+        A valid recording, ``source="animal"`` (unless the file says otherwise).
+
+    Raises
+    ------
+    RecordingError
+        Not an NWB file; no position; an unknown epoch; no tracking samples in the epoch.
+
+    Examples
+    --------
+    >>> rec = from_nwb("tests/data/A2929-200711.nwb", epoch="wake")   # doctest: +SKIP
+    >>> rec.sizes["unit"], str(rec.region.values[0])                  # doctest: +SKIP
+    (15, 'adn')
+    """
+    pynwb = _nwb_classes()[0]
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"`path` does not exist: {path}")
+    check_option("trials", trials, ("auto", True, False))
+    check_option("activity", activity, ("auto", "units", "series"))
+    try:
+        io = pynwb.NWBHDF5IO(str(path), "r")
+        with warnings.catch_warnings():
+            # deprecations in how an older file was written are not the reader's to fix
+            warnings.simplefilter("ignore", DeprecationWarning)
+            nwb = io.read()
+    except Exception as err:
+        raise RecordingError(f"`path` is not a readable NWB file: {path} "
+                             f"({type(err).__name__}: {err})") from err
+    with io:
+        return _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction,
+                         head_direction_sign, position, position_units, environment,
+                         activity, config)
+
+
+def _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction, head_direction_sign,
+              position, position_units, environment, activity, config):
+    time, xy, attrs = _read_position(nwb, position, floor_axes, position_units, path)
+    time = check_time(time, "position timestamps")
+    hd, hd_attrs = _read_head_direction(nwb, head_direction, attrs["nwb_floor_axes"],
+                                        head_direction_sign, time, path)
+    attrs.update(hd_attrs)
+    epoch_rows = _epoch_rows(nwb, epoch, path)
+    ids, starts, stops, from_trials = _trial_intervals(nwb, epoch_rows, trials,
+                                                       _support(nwb, time))
+    dt = float(np.median(np.diff(time)))
+    index = _assign_samples(time, ids, starts, stops, dt, config)
+    keep = index >= 0
+    if not keep.any():
+        raise RecordingError(f"`epoch` {epoch!r} holds no tracking samples (tracking covers "
+                             f"{time[0]:.3f}-{time[-1]:.3f} s) in {path}")
+    present = np.unique(index[keep])
+    ids, starts, stops = ids[present], starts[present], stops[present]
+    index = np.searchsorted(present, index[keep])
+    time, xy = time[keep], xy[keep]
+    sample_starts, sample_stops, _ = trial_blocks(index)
+    trial_env = _trial_environment(nwb, environment, ids, from_trials)
+
+    values, unit_ids, unit_coords, kind = _read_activity(
+        nwb, activity, keep, time, index, starts, stops)
+    # a file written by to_nwb carries the recording's own attrs: restore them exactly
+    attrs = _saved_attrs(nwb) or {
+        "source": "animal", "activity_kind": kind,
+        "session_id": str(nwb.session_id or nwb.identifier),
+        "subject": str(getattr(nwb.subject, "subject_id", "") or ""),
+        "species": str(getattr(nwb.subject, "species", "") or ""),
+        "nwb_file": path.name, "epoch": "" if epoch is None else str(epoch),
+        "session_start_time": nwb.session_start_time.isoformat(), **attrs}
+    extras = _read_extras(nwb, keep)
+    env_ids = extras.pop("environment_id", None)
+    rec = assemble(time=time, trial=ids[index], trial_id=ids,
+                   trial_time=time - np.repeat(starts, sample_stops - sample_starts),
+                   table={"trial_start": starts, "trial_stop": stops,
+                          "trial_environment": trial_env}, dt=dt, attrs=attrs,
+                   environment_ids=None if env_ids is None else env_ids[1])
+    if env_ids is not None:
+        rec.variables["environment_id"].attrs.update(env_ids[2])
+    rec = rec.assign_coords(unit=unit_ids)
+    rec = rec.assign_coords({k: ("unit", v) for k, v in unit_coords.items()})
+    for name in unit_coords:
+        rec.variables[name].attrs.update(units="", long_name=name.replace("_", " "))
+    rec["activity"] = ("time", "unit"), values
+    rec["position"] = ("time", "space"), xy
+    if hd is not None:
+        rec["head_direction"] = "time", hd[keep]
+    for name, (dims, data, var_attrs, is_coord) in sorted(extras.items(),
+                                                          key=lambda kv: not kv[1][3]):
+        if is_coord:
+            rec = rec.assign_coords({name: (dims, data, var_attrs)})
+        else:
+            rec[name] = dims, data, var_attrs
+    for name, var_attrs in _saved_var_attrs(nwb).items():
+        if name in rec.variables:
+            rec.variables[name].attrs.update(var_attrs)
+    return validate(annotate(rec))
+
+
+def _trial_environment(nwb, environment, ids, from_trials):
+    if isinstance(environment, str):
+        if not from_trials or environment not in nwb.trials.colnames:
+            cols = list(nwb.trials.colnames) if nwb.trials is not None else []
+            raise RecordingError(f"`environment` must be an integer or a column of the "
+                                 f"trials table {cols}; got {environment!r}")
+        table_ids = np.asarray(nwb.trials.id[:])
+        column = np.asarray(nwb.trials[environment][:])
+        if column.dtype.kind not in "iu":
+            raise RecordingError(f"`environment` column {environment!r} must hold integers; "
+                                 f"got dtype {column.dtype}")
+        return column[np.searchsorted(table_ids, ids, sorter=np.argsort(table_ids))
+                      .clip(0, table_ids.size - 1)]
+    if from_trials and environment == 0 and nwb.trials is not None \
+            and "environment" in nwb.trials.colnames:
+        return _trial_environment(nwb, "environment", ids, from_trials)
+    return np.full(ids.size, int(environment))
+
+
+def _read_activity(nwb, activity, keep, time, index, starts, stops):
+    module = nwb.processing.get(MODULE)
+    series = module.data_interfaces.get("activity") if module is not None else None
+    if activity == "series" or (activity == "auto" and series is not None):
+        if series is None:
+            raise RecordingError(f"`activity` is 'series' but the file has no "
+                                 f"processing/{MODULE}/activity")
+        values = np.asarray(series.data[:])[keep].astype(np.float32)
+        table = module.data_interfaces.get("unit_table")
+        coords = {} if table is None else {c: _text(table[c][:]) for c in table.colnames
+                                           if c != "unit"}
+        ids = (np.arange(values.shape[1]) if table is None else _text(table["unit"][:]))
+        kind = _saved_attrs(nwb).get("activity_kind", "rate")
+        return values, ids, coords, kind
+    units = nwb.units
+    if units is None or len(units) == 0:
+        raise RecordingError("the NWB file has no Units table (spike times) and no "
+                             f"processing/{MODULE}/activity series")
+    spikes = [np.asarray(units["spike_times"][i], dtype=float) for i in range(len(units))]
+    values = bin_spikes(spikes, time, index, starts, stops)
+    coords = {}
+    for col in units.colnames:
+        if col in _NOT_UNIT_COORDS:
+            continue
+        column = list(units[col][:])
+        if all(hasattr(v, "name") for v in column):        # e.g. electrode_group
+            column = [v.name for v in column]
+        column = np.asarray(column)
+        if column.ndim == 1 and column.dtype.kind in "iufbUSO":
+            coords["region" if col == "location" else col] = _text(column)
+    return values, np.asarray(units.id[:]), coords, "spike_count"
+
+
+def _text(values):
+    values = np.asarray(values)
+    return values.astype(str).astype(object) if values.dtype.kind in "USO" else values
+
+
+def _saved_attrs(nwb):
+    """Dataset attrs that :func:`to_nwb` stored in the file's notes."""
+    notes = nwb.notes or ""
+    if not notes.startswith(_ATTRS_NOTE):
+        return {}
+    return json.loads(notes[len(_ATTRS_NOTE):])
+
+
+def _meta(text):
+    """The JSON that :func:`to_nwb` keeps in a description, or None."""
+    try:
+        meta = json.loads(text)
+    except (TypeError, ValueError):
+        return None
+    return meta if isinstance(meta, dict) and "hippo_probe" in meta else None
+
+
+def _saved_var_attrs(nwb):
+    """attrs of variables with a standard NWB home (position, trial table …)."""
+    module = nwb.processing.get(MODULE)
+    table = module.data_interfaces.get("variable_attrs") if module is not None else None
+    if table is None:
+        return {}
+    return {str(n): json.loads(a) for n, a in zip(table["variable"][:], table["attrs"][:])}
+
+
+def _read_extras(nwb, keep):
+    """Variables that :func:`to_nwb` stored because NWB has no type for them:
+    name -> (dims, data, attrs, is_coord)."""
+    out = {}
+    module = nwb.processing.get(MODULE)
+    series = [] if module is None else [
+        (name, obj.comments, obj.data) for name, obj in module.data_interfaces.items()
+        if name != "activity" and hasattr(obj, "comments")]
+    scratch = [(name, obj.description, obj.data) for name, obj in nwb.scratch.items()
+               if hasattr(obj, "description")]
+    for name, text, data in series + scratch:
+        meta = _meta(text)
+        if meta is None:
+            continue
+        values = np.asarray(data[()])
+        if meta["dims"][:1] == ["time"]:
+            values = values[keep]
+        else:    # HDF5 may store a one-element array as a scalar
+            values = values.reshape(meta["shape"])
+        values = _text(values) if meta["dtype"] in ("object", "str") else values.astype(
+            meta["dtype"])
+        out[name] = tuple(meta["dims"]), values, meta["attrs"], meta["coord"]
+    return out
+
+
+def to_nwb(rec, path, overwrite=False):
+    """Write a recording as an NWB file, so it can be shared in the community format.
+
+    ``position`` becomes a ``Position``/``SpatialSeries`` (metres, the arena frame) and
+    ``head_direction`` a ``CompassDirection`` (radians, counter-clockwise from +x), both
+    under ``processing/behavior``; the trial table becomes the NWB trials table (column
+    ``environment``) and the tracked time support the ``position_time_support`` intervals;
+    ``activity`` (LSTM states or binned counts, not spike times) becomes a TimeSeries
+    ``processing/hippo_probe/activity`` with the unit coords in a ``unit_table``. The
+    other per-sample variables become TimeSeries there too, and the variables NWB has no
+    type for (``readout_weight``, ``arena_vertices``, ``environment_id``, …) go to the
+    file's ``scratch`` space, each with its dims and attrs as JSON; the dataset attrs are
+    kept as JSON in the file's ``notes``. ``from_nwb(path, epoch=None)`` reads it all
+    back. The file is written beside ``path`` and renamed into place, so a crash leaves
+    no half file.
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        A valid recording (loaded into memory while writing).
+    path : str or os.PathLike
+        Destination ``.nwb`` file.
+    overwrite : bool
+        Replace an existing file.
+
+    Examples
+    --------
+    >>> to_nwb(rec, "session.nwb")                      # doctest: +SKIP
+    >>> back = from_nwb("session.nwb", epoch=None)       # doctest: +SKIP
+    """
+    pynwb, Position, CompassDirection, SpatialSeries = _nwb_classes()
+    from hdmf.common import DynamicTable, VectorData
+    from pynwb.epoch import TimeIntervals
+
+    validate(rec)
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise FileExistsError(f"`path` already exists: {path}; pass overwrite=True to "
+                              "replace it")
+    attrs = _plain(dict(rec.attrs))
+    start_time = attrs.get("session_start_time")
+    nwb = pynwb.NWBFile(
+        session_description=f"hippo_probe recording ({attrs['source']}, "
+                            f"{attrs['activity_kind']})",
+        identifier=str(attrs.get("session_id") or uuid.uuid4()),
+        session_start_time=(datetime.datetime.fromisoformat(start_time) if start_time
+                            else datetime.datetime.now(datetime.timezone.utc)),
+        notes=_ATTRS_NOTE + json.dumps(attrs))
+    time = rec["time"].values
+    behavior = nwb.create_processing_module("behavior", "tracking")
+    pos = SpatialSeries(name="position", data=rec["position"].values, timestamps=time,
+                        unit="meters", reference_frame="arena frame: origin at the arena "
+                        "centre, x and y in the floor plane")
+    behavior.add(Position(spatial_series=pos, name="Position"))
+    if "head_direction" in rec:
+        behavior.add(CompassDirection(name="CompassDirection", spatial_series=SpatialSeries(
+            name="head_direction", data=rec["head_direction"].values, timestamps=pos,
+            unit="radians", reference_frame="counter-clockwise from +x")))
+    trial_env = rec["trial_environment"].values
+    t_start, t_stop = rec["trial_start"].values, rec["trial_stop"].values
+    nwb.add_trial_column("environment", "environment (arena) id of the trial")
+    support = TimeIntervals(name=SUPPORT, description="the tracked time support")
+    for k, tid in enumerate(rec["trial_id"].values):
+        nwb.add_trial(start_time=float(t_start[k]), stop_time=float(t_stop[k]),
+                      environment=int(trial_env[k]), id=int(tid))
+        support.add_interval(start_time=float(t_start[k]), stop_time=float(t_stop[k]))
+    nwb.add_time_intervals(support)
+
+    module = nwb.create_processing_module(MODULE, "hippo_probe recording variables")
+    activity = rec["activity"]
+    module.add(pynwb.TimeSeries(name="activity", data=activity.values, timestamps=pos,
+                                unit=activity.attrs["units"],
+                                description=activity.attrs["long_name"]))
+    unit_coords = [c for c, v in rec.coords.items() if v.dims == ("unit",)]
+    module.add(DynamicTable(name="unit_table", description="unit ids and unit coords",
+                            columns=[VectorData(name=c, description=c,
+                                                data=_nwb_column(rec[c].values))
+                                     for c in unit_coords]))
+    standard = {"time", "trial", "environment", "trial_id", "trial_start",
+                "trial_stop", "trial_environment", "space", "activity", "position",
+                "head_direction", *unit_coords}
+    names = sorted(standard & set(rec.variables))
+    module.add(DynamicTable(
+        name="variable_attrs", description="attrs of the recording's variables",
+        columns=[VectorData(name="variable", description="variable name", data=names),
+                 VectorData(name="attrs", description="attrs as JSON",
+                            data=[json.dumps(_plain(dict(rec[n].attrs))) for n in names])]))
+    for name, var in rec.variables.items():
+        if name in standard:
+            continue
+        meta = json.dumps({"hippo_probe": 1, "dims": list(var.dims), "shape": var.shape,
+                           "attrs": _plain(dict(var.attrs)), "coord": name in rec.coords,
+                           "dtype": "str" if var.dtype.kind in "UOT" else str(var.dtype)})
+        data = _nwb_column(var.values)
+        if var.dims[:1] == ("time",):
+            module.add(pynwb.TimeSeries(name=name, data=data, timestamps=pos,
+                                        unit=var.attrs["units"], comments=meta,
+                                        description=var.attrs["long_name"]))
+        else:
+            nwb.add_scratch(np.asarray(data), name=name, description=meta)
+    tmp = path.parent / f".partial-{os.getpid()}-{uuid.uuid4().hex[:8]}-{path.name}"
+    try:
+        with pynwb.NWBHDF5IO(str(tmp), "w") as io:
+            io.write(nwb)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def _plain(mapping):
+    """attrs with numpy scalars and arrays turned into JSON-ready Python values."""
+    return {k: (v.tolist() if isinstance(v, (np.generic, np.ndarray)) else v)
+            for k, v in mapping.items()}
+
+
+def _nwb_column(values):
+    """Strings as a list of str (HDF5 variable-length strings); bools as uint8."""
+    if values.dtype.kind in "UOT":
+        return [str(v) for v in np.ravel(values)] if values.ndim == 1 else values.astype(str)
+    return values.astype(np.uint8) if values.dtype == bool else values

@@ -1,0 +1,37 @@
+"""``hippo-probe import-nwb``."""
+
+
+def add_commands(sub):
+    p = sub.add_parser("import-nwb", help="import an NWB session as a recording (zarr)")
+    p.add_argument("nwb", metavar="SESSION.nwb")
+    p.add_argument("dest", metavar="DEST.zarr", help="e.g. recordings/NAME.zarr")
+    p.add_argument("--epoch", default="wake",
+                   help="epoch tag to import (default 'wake'); 'all' for the whole file")
+    p.add_argument("--floor-axes", nargs=2, default=None, metavar=("A", "B"),
+                   help="position axes forming the floor (default: the two that vary most)")
+    p.add_argument("--head-direction-sign", default="auto", choices=["auto", "1", "-1"],
+                   help="sign of the compass angle (default: from the axes' handedness)")
+    p.add_argument("--no-trials", action="store_true",
+                   help="ignore the file's trials table (one trial per epoch)")
+    p.add_argument("--overwrite", action="store_true", help="replace DEST if it exists")
+    p.set_defaults(run=_import_nwb)
+
+
+def _import_nwb(args):
+    import os
+
+    from . import from_nwb, save_recording
+
+    if os.path.exists(args.dest) and not args.overwrite:   # fail before the slow import
+        raise FileExistsError(f"`dest` already exists: {args.dest}; pass --overwrite to "
+                              "replace it")
+
+    sign = args.head_direction_sign if args.head_direction_sign == "auto" else int(
+        args.head_direction_sign)
+    rec = from_nwb(args.nwb, epoch=None if args.epoch == "all" else args.epoch,
+                   trials=False if args.no_trials else "auto", floor_axes=args.floor_axes,
+                   head_direction_sign=sign)
+    save_recording(rec, args.dest, overwrite=args.overwrite)
+    print(f"saved {args.dest}: {rec.sizes['time']} samples x {rec.sizes['unit']} units, "
+          f"{rec.sizes['trial_id']} trial(s), {float(rec.activity.sum()):.0f} "
+          f"{rec.attrs['activity_kind']}")

@@ -1,0 +1,188 @@
+"""NWB import/export on a real mouse session (tests/data/A2929-200711.README.md)."""
+
+import datetime
+
+import numpy as np
+import pynwb
+import pytest
+import xarray as xr
+from pynwb.behavior import CompassDirection, Position, SpatialSeries
+
+from hippo_probe.cli import main as cli
+from hippo_probe.errors import RecordingError
+from hippo_probe.recording import (from_nwb, open_recording, save_recording, to_nwb,
+                                   validate)
+
+from .conftest import NWB_PATH
+
+WAKE_SPIKES_TRACKED = 44_618       # README: wake spikes inside 670.64-1199.99 s
+
+
+@pytest.fixture(scope="module")
+def wake():
+    return from_nwb(NWB_PATH, epoch="wake")
+
+
+@pytest.fixture(scope="module")
+def nwb_file():
+    with pynwb.NWBHDF5IO(str(NWB_PATH), "r") as io:
+        nwb = io.read()
+        pos = nwb.acquisition["Position"]
+        yield {
+            "t": pos["x"].timestamps[:], "x": pos["x"].data[:], "z": pos["z"].data[:],
+            "ry": nwb.acquisition["CompassDirection"]["ry"].data[:],
+            "spikes": [nwb.units["spike_times"][i] for i in range(len(nwb.units))],
+        }
+
+
+def test_wake_units_and_regions(wake):
+    assert wake.sizes["unit"] == 15
+    assert wake.region.values.tolist() == ["adn"] * 7 + ["ca1"] * 8
+    assert wake.attrs["source"] == "animal" and wake.attrs["activity_kind"] == "spike_count"
+    assert wake.attrs["session_id"] == "A2929-200711"
+
+
+def test_wake_spike_counts_add_up(wake, nwb_file):
+    assert int(wake.activity.sum()) == WAKE_SPIKES_TRACKED
+    t = nwb_file["t"]
+    per_unit = [((s >= t[0]) & (s <= t[-1])).sum() for s in nwb_file["spikes"]]
+    np.testing.assert_array_equal(wake.activity.sum("time").values, per_unit)
+    # nearest-sample binning: a spike lands on the sample closest to it
+    s = nwb_file["spikes"][0]
+    s = s[(s >= t[0]) & (s <= t[-1])]
+    nearest = np.abs(t[:, None] - s[None, :200]).argmin(0)
+    expected = np.bincount(nearest, minlength=t.size)[:nearest.max() + 1]
+    np.testing.assert_array_equal(wake.activity.values[:nearest.max() + 1, 0], expected)
+
+
+def test_wake_floor_plane_position(wake, nwb_file):
+    assert wake.attrs["nwb_floor_axes"] == ["x", "z"]        # chosen by spread: y is vertical
+    np.testing.assert_array_equal(wake.position.values, np.c_[nwb_file["x"], nwb_file["z"]])
+    np.testing.assert_array_equal(wake.time.values, nwb_file["t"])
+    assert wake.trial_start.item() == nwb_file["t"][0] and wake.trial_time[0] == 0
+
+
+def _heading_agreement(position, head_direction, time, window=0.5, min_speed=0.2):
+    """Resultant length and mean of (head direction - direction of movement) while running."""
+    step = int(round(window / np.median(np.diff(time))))
+    d = position[step:] - position[:-step]
+    speed = np.hypot(*d.T) / (time[step:] - time[:-step])
+    moving = np.arctan2(d[:, 1], d[:, 0])
+    hd = head_direction[step // 2: step // 2 + moving.size]
+    ok = (speed > min_speed) & np.isfinite(hd) & np.isfinite(moving)
+    z = np.exp(1j * (hd[ok] - moving[ok])).mean()
+    return np.abs(z), np.degrees(np.angle(z)), ok.sum()
+
+
+def test_head_direction_follows_movement_when_running(wake, nwb_file):
+    assert wake.attrs["nwb_head_direction_sign"] == -1        # (x, z) floor: wrap(-ry)
+    hd = wake.head_direction.values
+    assert (hd >= -np.pi).all() and (hd < np.pi).all()
+    r, offset, n = _heading_agreement(wake.position.values, hd, wake.time.values)
+    assert n > 500 and r > 0.7 and abs(offset) < 15
+    # the other sign convention follows movement clearly worse
+    flipped = np.mod(np.asarray(nwb_file["ry"]) + np.pi, 2 * np.pi) - np.pi
+    r_flipped, _, _ = _heading_agreement(wake.position.values, flipped, wake.time.values)
+    assert r_flipped < r - 0.1
+
+
+def test_options_floor_axes_and_sign():
+    rec = from_nwb(NWB_PATH, epoch="wake", floor_axes=("z", "x"), head_direction_sign=1)
+    assert rec.attrs["nwb_floor_axes"] == ["z", "x"]
+    assert rec.attrs["nwb_head_direction_sign"] == 1
+    with pytest.raises(ValueError, match="`floor_axes` must be one of"):
+        from_nwb(NWB_PATH, floor_axes=("x", "w"))
+
+
+def test_wake_validates_and_round_trips_through_zarr(wake, tmp_path):
+    validate(wake, check_data=True)
+    save_recording(wake, tmp_path / "wake.zarr")
+    back = open_recording(tmp_path / "wake.zarr")
+    xr.testing.assert_identical(back.load(), wake)
+
+
+def test_wake_round_trips_through_nwb(wake, tmp_path):
+    to_nwb(wake, tmp_path / "wake.nwb")
+    back = from_nwb(tmp_path / "wake.nwb", epoch=None)
+    xr.testing.assert_identical(back, wake)
+
+
+def test_network_recording_round_trips_through_nwb(network_recording, tmp_path):
+    to_nwb(network_recording, tmp_path / "net.nwb")
+    back = from_nwb(tmp_path / "net.nwb", epoch=None)
+    for name in ("position", "head_direction", "activity", "trial", "trial_start",
+                 "trial_stop", "trial_environment", "environment"):
+        assert back[name].dtype == network_recording[name].dtype
+        np.testing.assert_array_equal(back[name].values, network_recording[name].values)
+    xr.testing.assert_identical(back, network_recording)
+    with pytest.raises(FileExistsError, match="pass overwrite=True"):
+        to_nwb(network_recording, tmp_path / "net.nwb")
+
+
+def _write_nwb(path, *, position=True, trials=None, spikes=(), unit="cm"):
+    nwb = pynwb.NWBFile(session_description="synthetic", identifier="synthetic",
+                        session_start_time=datetime.datetime(2020, 1, 1,
+                                                             tzinfo=datetime.timezone.utc))
+    t = np.arange(1000) * 0.01
+    if position:
+        behavior = nwb.create_processing_module("behavior", "behaviour")
+        xy = np.c_[np.cos(t), np.sin(t)] * 40
+        behavior.add(Position(spatial_series=SpatialSeries(
+            name="pos", data=xy, timestamps=t, unit=unit, reference_frame="", conversion=0.5)))
+        behavior.add(CompassDirection(spatial_series=SpatialSeries(
+            name="hd", data=np.degrees(t + np.pi / 2) % 360, timestamps=t, unit="degrees",
+            reference_frame="")))
+    for times in spikes:
+        nwb.add_unit(spike_times=times)
+    if trials is not None:
+        nwb.add_trial_column("arena", "arena id")
+        for (a, b), env in trials:
+            nwb.add_trial(start_time=a, stop_time=b, arena=env)
+    with pynwb.NWBHDF5IO(str(path), "w") as io:
+        io.write(nwb)
+    return t
+
+
+def test_processing_behavior_conversion_units_and_touching_trials(tmp_path):
+    spikes = [np.array([0.0, 0.004, 1.0, 4.99, 5.0, 5.004, 9.99])]
+    t = _write_nwb(tmp_path / "s.nwb", trials=[((0.0, 5.0), 2), ((5.0, 9.99), 7)],
+                   spikes=spikes)
+    rec = from_nwb(tmp_path / "s.nwb", epoch=None, environment="arena")
+    # conversion 0.5 and cm: 40 units * 0.5 = 20 cm = 0.2 m
+    np.testing.assert_allclose(np.hypot(*rec.position.values.T), 0.2)
+    kept = np.isin(t, rec.time.values)
+    assert kept.sum() == t.size - 1
+    np.testing.assert_allclose(rec.head_direction.values,
+                               np.mod(t[kept] + np.pi / 2 + np.pi, 2 * np.pi) - np.pi, atol=1e-9)
+    assert rec.trial_environment.values.tolist() == [2, 7]
+    # the trials touch at 5.0 s: the second trial's first samples are left out for the gap
+    first_of_second = rec.time.values[rec.trial.values == rec.trial_id.values[1]][0]
+    last_of_first = rec.time.values[rec.trial.values == rec.trial_id.values[0]][-1]
+    assert first_of_second - last_of_first >= 2 * rec.attrs["dt"] * 0.9
+    assert int(rec.activity.sum()) == spikes[0].size          # every spike inside a trial
+
+
+def test_bad_inputs_write_nothing(tmp_path):
+    dest = tmp_path / "out.zarr"
+    readme = NWB_PATH.with_suffix(".README.md")
+    _write_nwb(tmp_path / "nopos.nwb", position=False, spikes=[np.array([0.5])])
+    cases = [
+        ([str(readme), str(dest)], "not a readable NWB file"),
+        ([str(tmp_path / "nopos.nwb"), str(dest)], "has no Position"),
+        ([str(NWB_PATH), str(dest), "--epoch", "run"], "`epoch` must be one of"),
+    ]
+    for argv, message in cases:
+        with pytest.raises(RecordingError, match=message):
+            from_nwb(argv[0], epoch=argv[3] if len(argv) > 3 else "wake")
+        assert cli(["import-nwb", *argv]) == 2
+        assert not dest.exists() and sorted(p.name for p in tmp_path.iterdir()) == [
+            "nopos.nwb"]
+
+
+def test_cli_import(tmp_path, capsys):
+    dest = tmp_path / "rec.zarr"
+    assert cli(["import-nwb", str(NWB_PATH), str(dest)]) == 0
+    assert "44618 spike_count" in capsys.readouterr().out
+    assert open_recording(dest).sizes["unit"] == 15
+    assert cli(["import-nwb", str(NWB_PATH), str(dest)]) == 2
+    assert "already exists" in capsys.readouterr().err

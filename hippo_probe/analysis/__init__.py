@@ -8,14 +8,18 @@ accessor (``maps.hp.plot()``), registered by :mod:`hippo_probe.plot`.
 
 from .. import plot as _plot  # noqa: F401  (registers the ``.hp`` xarray accessor)
 from ._common import AnalysisWarning
+from .classification_accuracy import classification_accuracy
 from .head_direction_tuning import head_direction_tuning
+from .localization_error import localization_error
 from .ratemaps import ratemaps
 from .spatial_information import spatial_information
 from .spatial_selectivity import spatial_selectivity
 
 __all__ = [
     "AnalysisWarning",
+    "classification_accuracy",
     "head_direction_tuning",
+    "localization_error",
     "ratemaps",
     "spatial_information",
     "spatial_selectivity",

@@ -1,0 +1,45 @@
+"""Defaults of the network (one place for its numbers)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..world.config import FEATURES, WorldConfig
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """Architecture of a :class:`~hippo_probe.model.Navigator`.
+
+    Attributes
+    ----------
+    hidden_size : int
+        256 LSTM units, as in the study.
+    n_classes : int
+        Size of the softmax readout over arenas (100 for the specialized task, 0 = none).
+    input_scale : tuple of float
+        Each input feature is divided by its scale so that all inputs are O(1) (the raw
+        displacement is ~0.06 m per step, the contact distance < 0.05 m). See
+        :func:`input_scale_for`.
+    forget_bias : float
+        Initial forget-gate bias (1.0, Jozefowicz et al. 2015).
+    """
+
+    hidden_size: int = 256
+    n_classes: int = 0
+    input_scale: tuple = (1.0,) * len(FEATURES)
+    forget_bias: float = 1.0
+
+    @property
+    def input_size(self) -> int:
+        return len(self.input_scale)
+
+
+def input_scale_for(world: WorldConfig) -> tuple:
+    """Per-feature input scales from the world: the mean displacement per step for dx, dy;
+    the touch range for the contact distance; 1 for unit-range features (cos, sin, flag)
+    and the turn per step's typical size (0.5 rad) for the heading change."""
+    step = world.motion.mean_speed * world.motion.network_dt
+    scale = {"dx": step, "dy": step, "dhd": 0.5,
+             "contact_distance": world.sensors.touch_range}
+    return tuple(float(scale.get(name, 1.0)) for name in FEATURES)

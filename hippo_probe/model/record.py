@@ -1,0 +1,135 @@
+"""Record a network like an electrophysiology session: ``record(network, batch)``.
+
+The result is a recording (schema v1, see ``recordings/README.md``) holding everything an
+analysis needs, so no analysis ever needs torch: the LSTM's hidden state as ``activity``,
+the true pose, the network's estimate in the arena frame, class probabilities and the
+classifier's weights, the arena geometry, and optionally the baselines' estimates.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from ..recording import annotate, stack_trials, trial_layout, validate
+from ..tasks import fixed_arenas, task_config
+
+#: baseline result names accepted by ``record(..., baselines=...)``, with their dims
+BASELINE_VARIABLES = {
+    "estimate_pi": ("time", "space"), "estimate_sh": ("time", "space"),
+    "estimate_nb": ("time", "space"), "estimate_pf": ("time", "space"),
+    "estimate_pfslam": ("time", "space"), "pf_cov": ("time", "cov"),
+    "class_probability_pfslam": ("time", "environment_id"),
+}
+
+
+@torch.no_grad()
+def run_network(network, batch, chunk: int = 250):
+    """(h (T,B,H) float32, xy (T,B,2), probabilities (T,B,C) or None) on a TrialBatch."""
+    network.eval()
+    hs, xys, probs = [], [], []
+    for lo in range(0, len(batch), chunk):
+        xy, logits, h = network(torch.from_numpy(batch.inputs[:, lo:lo + chunk]))
+        hs.append(h.numpy())
+        xys.append(xy.numpy())
+        if logits is not None:
+            probs.append(torch.softmax(logits, dim=-1).numpy())
+    h = np.concatenate(hs, axis=1)
+    xy = np.concatenate(xys, axis=1).astype(np.float64)
+    return h, xy, (np.concatenate(probs, axis=1) if probs else None)
+
+
+def record(network, batch, *, baselines: dict | None = None, session_id: str | None = None,
+           checkpoint: str | None = None, chunk: int = 250):
+    """Run ``network`` on ``batch`` and return its recording.
+
+    Parameters
+    ----------
+    network : Navigator
+        E.g. ``hippo_probe.load_pretrained("generalized")``.
+    batch : TrialBatch
+        Trials to run (any task: a network can be recorded in another task's arenas).
+    baselines : dict, optional
+        Arrays (T, B, ...) in the arena frame to add, named as in
+        :data:`BASELINE_VARIABLES` (e.g. ``{"estimate_pf": ..., "pf_cov": ...}``).
+    session_id, checkpoint : str, optional
+        Dataset attrs (defaults: ``"<task>-<split>-seed<seed>"`` and the network's task).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``activity`` (time, unit) = LSTM h (float32); ``position``, ``head_direction``,
+        ``contact``, ``speed``; ``estimate`` (time, space): the network's estimate in the
+        arena frame (the start position added back for start-relative tasks); if the
+        network classifies: ``class_probability`` (time, environment_id) and
+        ``readout_weight`` (environment_id, unit); ``position_readout_weight`` (space,
+        unit); ``arena_vertices`` (environment_id, vertex, space).
+
+    Examples
+    --------
+    >>> import hippo_probe as hp
+    >>> net = hp.load_pretrained("specialized")                       # doctest: +SKIP
+    >>> batch = hp.tasks.make_trials("specialized", 20, "test")       # doctest: +SKIP
+    >>> rec = hp.record(net, batch)                                   # doctest: +SKIP
+    >>> hp.ratemaps(rec)                                              # doctest: +SKIP
+    """
+    h, xy, prob = run_network(network, batch, chunk)
+    T, B, H = h.shape
+    task = task_config(batch.task)
+    estimate = xy + batch.start[None] if task.target == "start_relative" else xy
+    net_task = getattr(network, "task", None)
+    rec = trial_layout(
+        T, B, batch.dt, trial_id=batch.trial_index, environment=batch.environment,
+        start_position=batch.start, task=batch.task, split=batch.split,
+        seed=int(batch.seed), network_task=str(net_task or batch.task),
+        checkpoint=str(checkpoint or net_task or "unknown"),
+        session_id=session_id or f"{batch.task}-{batch.split}-seed{batch.seed}",
+        subject=f"navigator-{net_task or batch.task}", species="artificial (peephole LSTM)")
+
+    # environment table: every arena of the task (fixed arenas) or of the trials (novel)
+    if task.arenas == "fixed":
+        env_ids = np.arange(task.n_arenas)
+        verts = np.asarray(fixed_arenas(batch.task))
+    else:
+        env_ids, first = np.unique(batch.environment, return_index=True)
+        verts = batch.arena_vertices[first]
+    if prob is not None and prob.shape[-1] != len(env_ids):
+        raise ValueError(f"`network` classifies {prob.shape[-1]} arenas but task "
+                         f"{batch.task!r} has {len(env_ids)}; record it on the "
+                         f"specialized task")
+    rec = rec.assign_coords(environment_id=env_ids, unit=np.arange(H))
+    step = np.linalg.norm(np.diff(np.concatenate([batch.start[None], batch.position]),
+                                  axis=0), axis=-1)
+    data = {
+        "activity": (("time", "unit"), stack_trials(h).astype(np.float32)),
+        "position": (("time", "space"), stack_trials(batch.position)),
+        "head_direction": ("time", stack_trials(batch.head_direction)),
+        "contact": ("time", stack_trials(batch.contact)),
+        "speed": ("time", stack_trials(step / batch.dt)),
+        "estimate": (("time", "space"), stack_trials(estimate)),
+        "arena_vertices": (("environment_id", "vertex", "space"), verts),
+        "position_readout_weight": (("space", "unit"),
+                                    network.position.weight.detach().numpy().copy()),
+    }
+    if prob is not None:
+        data["class_probability"] = (("time", "environment_id"),
+                                     stack_trials(prob).astype(np.float32))
+        data["readout_weight"] = (("environment_id", "unit"),
+                                  network.classifier.weight.detach().numpy().copy())
+    for name, values in (baselines or {}).items():
+        if name not in BASELINE_VARIABLES:
+            raise ValueError(f"`baselines` keys must be among {sorted(BASELINE_VARIABLES)}; "
+                             f"got {name!r}")
+        values = np.asarray(values)
+        if values.shape[:2] != (T, B):
+            raise ValueError(f"`baselines[{name!r}]` must have shape ({T}, {B}, ...); "
+                             f"got {values.shape}")
+        data[name] = (BASELINE_VARIABLES[name], stack_trials(values))
+    rec = rec.assign(data)
+    rec["position_readout_weight"].attrs.update(
+        units="m", long_name="weight of the (x, y) position readout")
+    rec["vertex"] = ("vertex", np.arange(verts.shape[1]),
+                     {"units": "1", "long_name": "polygon vertex index"})
+    rec = annotate(rec)
+    validate(rec)
+    return rec

@@ -1,0 +1,52 @@
+"""Shipped pretrained networks and ``load_pretrained``.
+
+Files here: ``<name>.pt`` (parameters, architecture, task, test metrics) and
+``<name>.log.json`` (the full training log: curves, config, seeds, versions, wall time,
+command line). Names: ``localization``, ``generalized``, ``specialized`` and
+``generalized_readout`` (the generalized network with a retrained arena readout).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+HERE = Path(__file__).parent
+NAMES = ("localization", "generalized", "specialized", "generalized_readout")
+
+
+def available() -> list:
+    """Names of the shipped networks present in this installation."""
+    return sorted(p.stem for p in HERE.glob("*.pt"))
+
+
+def resolve_network_file(name_or_path) -> Path:
+    """A shipped network's file by name, or a path to a network/checkpoint file."""
+    path = Path(name_or_path)
+    if path.suffix == ".pt" or path.exists():
+        return path
+    candidate = HERE / f"{name_or_path}.pt"
+    if not candidate.exists():
+        raise ValueError(f"`name` must be one of the shipped networks {available()} or a "
+                         f"path to a .pt file; got {name_or_path!r}")
+    return candidate
+
+
+def load_pretrained(name: str):
+    """Load a shipped network (or a network/checkpoint file) as a Navigator in eval mode.
+
+    Examples
+    --------
+    >>> import hippo_probe as hp
+    >>> net = hp.load_pretrained("generalized")            # doctest: +SKIP
+    >>> net.task                                            # doctest: +SKIP
+    'generalized'
+    """
+    from ..model.navigator import Navigator
+    from ..training.checkpoint import load
+
+    obj = load(resolve_network_file(name))
+    net = Navigator(obj["model_config"])
+    net.load_state_dict(obj.get("best_model") or obj["model"])
+    net.task = obj.get("task")
+    net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test")}
+    return net.eval()

@@ -1,0 +1,94 @@
+"""Defaults of a training run (one place for its numbers)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from .._validators import check_number, check_option, check_positive
+from ..tasks import TASKS
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything that defines a training run; saved in every checkpoint and log.
+
+    Attributes
+    ----------
+    task : str
+        "localization", "generalized" or "specialized".
+    n_trials : int or None
+        Training-set size (trials 0 .. n-1 of the train split); None = the study's size
+        (5,000 / 300,000 / 250,000).
+    steps : int
+        Budget in optimizer steps.
+    batch_size : int
+        64 sequences of 500 steps per step (global, across DDP ranks): large enough for
+        stable gradients, small enough for ~1 step/s on 2 CPU cores.
+    lr, lr_final : float
+        Adam learning rate, cosine-decayed from ``lr`` (1e-3, Adam's default) to
+        ``lr_final`` (1e-4) over the budget.
+    clip_norm : float
+        Gradient norm clip, 1.0 (LSTMs over 500 steps have rare exploding gradients).
+    validate_every : int
+        Steps between validations on the validation split.
+    n_validation : int
+        Validation trials (1,000: the whole validation split).
+    checkpoint_minutes : float
+        Wall time between atomic checkpoints.
+    threads : int
+        torch (and numba) threads per process, pinned.
+    seed : int
+        Seed of the task splits (which trials exist).
+    init_seed : int
+        Seed of the parameter initialisation and of the order of training trials.
+    hidden_size : int
+        256 units, the study's size.
+    class_weight : float or None
+        Weight of the cross-entropy term; None = the rule of :func:`class_weight_rule`.
+    init_from : str or None
+        Checkpoint or pretrained name whose parameters initialise the network.
+    train_only : str or None
+        "classifier": freeze everything else and train the arena readout alone on
+        cross-entropy (readout retraining, the study's Fig. 3F).
+    """
+
+    task: str = "generalized"
+    n_trials: int | None = None
+    steps: int = 5000
+    batch_size: int = 64
+    lr: float = 1e-3
+    lr_final: float = 1e-4
+    clip_norm: float = 1.0
+    validate_every: int = 250
+    n_validation: int = 1000
+    checkpoint_minutes: float = 3.0
+    threads: int = 1
+    seed: int = 0
+    init_seed: int = 0
+    hidden_size: int = 256
+    class_weight: float | None = None
+    init_from: str | None = None
+    train_only: str | None = None
+
+    def __post_init__(self):
+        check_option("task", self.task, TASKS)
+        if self.n_trials is not None:
+            check_positive("n_trials", self.n_trials, integer=True)
+        for name in ("steps", "batch_size", "validate_every", "n_validation", "threads",
+                     "hidden_size"):
+            check_positive(name, getattr(self, name), integer=True)
+        for name in ("lr", "lr_final", "clip_norm", "checkpoint_minutes"):
+            check_positive(name, getattr(self, name))
+        if self.class_weight is not None:
+            check_number("class_weight", self.class_weight, low=0, low_inclusive=True)
+        if self.train_only is not None:
+            check_option("train_only", self.train_only, ("classifier",))
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "TrainConfig":
+        names = {f.name for f in dataclasses.fields(cls)}
+        return cls(**{k: v for k, v in d.items() if k in names})

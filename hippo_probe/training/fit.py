@@ -1,0 +1,307 @@
+"""The training loop: Adam, clipped gradients, validation, atomic checkpoints, resume, DDP.
+
+Loss (per step, averaged over steps and trials)::
+
+    L = mean ||xy_hat - target||^2 / 2  +  lambda * CE(logits, arena)
+
+The squared error is averaged over the two coordinates. ``lambda`` is fixed for the run
+(:func:`class_weight_rule`) and logged.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+from tqdm.auto import tqdm
+
+from .._version import __version__
+from ..model.config import ModelConfig, input_scale_for
+from ..model.navigator import Navigator
+from ..tasks import make_trials, task_config
+from .checkpoint import load, save_atomic
+from .config import TrainConfig
+from .data import TrainingTrials
+
+
+def class_weight_rule(target_var: float, n_classes: int) -> float:
+    """lambda such that the weighted cross-entropy is half the squared error at chance.
+
+    At chance (predicting the mean position, 0, and a uniform class posterior) the squared
+    error is the target's mean square ``target_var`` and the cross-entropy ``ln C``; so
+    ``lambda = 0.5 * target_var / ln C`` makes ``lambda * CE`` about half of the
+    localization cost, the balance prescribed by the project's design.
+    """
+    return 0.5 * target_var / math.log(n_classes)
+
+
+def build_network(config: TrainConfig) -> Navigator:
+    task = task_config(config.task)
+    n_classes = task.n_classes if (task.classify or config.train_only == "classifier") else 0
+    if config.train_only == "classifier":
+        n_classes = task_config("specialized").n_arenas
+    model_config = ModelConfig(hidden_size=config.hidden_size, n_classes=n_classes,
+                               input_scale=input_scale_for(task.world))
+    torch.manual_seed(config.init_seed)
+    net = Navigator(model_config)
+    if config.init_from:
+        from ..pretrained import resolve_network_file
+        state = load(resolve_network_file(config.init_from))["model"]
+        own = net.state_dict()
+        missing = [k for k in own if k not in state]
+        own.update({k: v for k, v in state.items() if k in own and v.shape == own[k].shape})
+        net.load_state_dict(own)
+        if config.train_only != "classifier" and missing:
+            raise ValueError(f"`init_from` lacks parameters {missing}")
+    if config.train_only == "classifier":
+        for name, p in net.named_parameters():
+            p.requires_grad_(name.startswith("classifier."))
+    return net
+
+
+def losses(net, inputs, target, environment, class_weight, *, classifier_only=False):
+    """(total, mse, ce, xy, logits) on one batch of numpy arrays."""
+    xy, logits, _ = net(torch.from_numpy(inputs))
+    target = torch.from_numpy(np.asarray(target, dtype=np.float32))
+    mse = ((xy - target) ** 2).mean()
+    ce = torch.zeros(())
+    if logits is not None:
+        labels = torch.from_numpy(np.asarray(environment)).long()
+        ce = F.cross_entropy(logits.reshape(-1, logits.shape[-1]),
+                             labels.repeat(logits.shape[0]))
+    total = class_weight * ce if classifier_only else mse + class_weight * ce
+    return total, mse, ce, xy, logits
+
+
+@torch.no_grad()
+def evaluate_network(net, batch, class_weight: float = 0.0, chunk: int = 250) -> dict:
+    """Errors of ``net`` on a TrialBatch: per-step curves and summaries.
+
+    Returns a dict with ``error_m`` (T,) mean Euclidean error vs time, ``accuracy`` (T,)
+    (if the network classifies), overall means and the loss.
+    """
+    net.eval()
+    err_sum = np.zeros(batch.n_steps)
+    acc_sum = np.zeros(batch.n_steps)
+    mse_sum = ce_sum = 0.0
+    for lo in range(0, len(batch), chunk):
+        sl = slice(lo, lo + chunk)
+        _, mse, ce, xy, logits = losses(net, batch.inputs[:, sl], batch.target[:, sl],
+                                        batch.environment[sl], class_weight)
+        n = xy.shape[1]
+        mse_sum += float(mse) * n
+        ce_sum += float(ce) * n
+        err = torch.linalg.norm(xy - torch.from_numpy(batch.target[:, sl]).float(), dim=-1)
+        err_sum += err.sum(1).numpy()
+        if logits is not None:
+            hit = logits.argmax(-1) == torch.from_numpy(batch.environment[sl])
+            acc_sum += hit.float().sum(1).numpy()
+    net.train()
+    n = len(batch)
+    out = {"error_m": err_sum / n, "mean_error_m": float(err_sum.sum() / n / batch.n_steps),
+           "mse": mse_sum / n, "ce": ce_sum / n,
+           "loss": mse_sum / n + class_weight * ce_sum / n}
+    if net.classifier is not None:
+        out["accuracy"] = acc_sum / n
+        out["mean_accuracy"] = float(acc_sum.sum() / n / batch.n_steps)
+    return out
+
+
+def summarize(metrics: dict, dt: float, times=(50.0, 100.0, 200.0)) -> dict:
+    """Metrics at given times in the trial (s), JSON-ready."""
+    out = {k: v for k, v in metrics.items() if not isinstance(v, np.ndarray)}
+    for t in times:
+        k = int(round(t / dt)) - 1
+        out[f"error_{int(t)}s_m"] = float(metrics["error_m"][k])
+        if "accuracy" in metrics:
+            out[f"accuracy_{int(t)}s"] = float(metrics["accuracy"][k])
+    return out
+
+
+def _lr_at(config: TrainConfig, step: int) -> float:
+    frac = min(step / max(config.steps, 1), 1.0)
+    return config.lr_final + 0.5 * (config.lr - config.lr_final) * (1 + math.cos(math.pi * frac))
+
+
+def _distributed():
+    """(rank, world_size), initialising the process group under torchrun."""
+    world = int(os.environ.get("WORLD_SIZE", "1"))
+    if world <= 1:
+        return 0, 1
+    import torch.distributed as dist
+    if not dist.is_initialized():
+        dist.init_process_group("nccl" if torch.cuda.is_available() else "gloo")
+    return dist.get_rank(), world
+
+
+def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
+        stop_after: int | None = None) -> dict:
+    """Train (or resume training) a network; returns the training log.
+
+    Files in ``run_dir``: ``checkpoint.pt`` (everything needed to resume; written
+    atomically every ``checkpoint_minutes`` and at the end), ``network.pt`` (the best
+    parameters by validation loss, loadable by :func:`hippo_probe.load_pretrained`) and
+    ``log.json`` (curves, config, seeds, versions, wall time, command line, test metrics).
+
+    Parameters
+    ----------
+    config : TrainConfig
+    run_dir : path
+        Created if needed; if it holds a checkpoint of the same config, training resumes.
+    progress : bool
+        Show a tqdm progress bar (loss and validation error).
+    stop_after : int, optional
+        Stop (with a checkpoint) after this many optimizer steps of *this* call — to
+        simulate an interruption in tests.
+    """
+    rank, world = _distributed()
+    torch.set_num_threads(config.threads)
+    try:
+        import numba
+        numba.set_num_threads(min(config.threads, numba.config.NUMBA_NUM_THREADS))
+    except Exception:  # numba threading layer not initialisable: serial is fine
+        pass
+    run_dir = Path(run_dir)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    task = task_config(config.task)
+    n_trials = config.n_trials or task.train_trials
+    if config.batch_size % world:
+        raise ValueError(f"`batch_size` must be divisible by the world size ({world}); "
+                         f"got {config.batch_size}")
+
+    net = build_network(config)
+    params = [p for p in net.parameters() if p.requires_grad]
+    opt = torch.optim.Adam(params, lr=config.lr)
+    validation = make_trials(config.task, config.n_validation, "validation", config.seed)
+    classify = net.classifier is not None
+    if config.class_weight is not None:
+        class_weight = config.class_weight
+    elif classify:
+        class_weight = class_weight_rule(float(np.mean(validation.target ** 2)),
+                                         net.config.n_classes)
+    else:
+        class_weight = 0.0
+    classifier_only = config.train_only == "classifier"
+    if classifier_only:
+        class_weight = 1.0
+
+    ckpt_path = run_dir / "checkpoint.pt"
+    log = {"config": config.to_dict(), "n_trials": n_trials, "class_weight": class_weight,
+           "model_config": vars(net.config) | {"input_scale": list(net.config.input_scale)},
+           "package_version": __version__, "torch_version": torch.__version__,
+           "command": " ".join(sys.argv), "world_size": world, "train": [],
+           "validation": [], "wall_time_s": 0.0}
+    step, best_loss, best_state = 0, math.inf, None
+    if ckpt_path.exists():
+        ckpt = load(ckpt_path)
+        if ckpt["config"] != config.to_dict():
+            raise ValueError(f"`run_dir` {str(run_dir)!r} holds a checkpoint of another "
+                             f"configuration; use a new directory")
+        net.load_state_dict(ckpt["model"])
+        opt.load_state_dict(ckpt["optimizer"])
+        step, best_loss, best_state = ckpt["step"], ckpt["best_loss"], ckpt["best_model"]
+        log = ckpt["log"]
+        log.setdefault("resumed_at", []).append(step)
+
+    train_net = net
+    if world > 1:
+        train_net = torch.nn.parallel.DistributedDataParallel(net)
+    data = TrainingTrials(config.task, n_trials, config.batch_size, seed=config.seed,
+                          init_seed=config.init_seed, cache_dir=cache_dir)
+
+    def checkpoint():
+        if rank == 0:
+            save_atomic({"model": net.state_dict(), "optimizer": opt.state_dict(),
+                         "step": step, "best_loss": best_loss, "best_model": best_state,
+                         "config": config.to_dict(), "model_config": net.config,
+                         "task": config.task, "log": log}, ckpt_path)
+
+    def validate():
+        nonlocal best_loss, best_state
+        m = evaluate_network(net, validation, class_weight)
+        entry = {"step": step, "loss": m["loss"], "mean_error_m": m["mean_error_m"],
+                 "mse": m["mse"], "ce": m["ce"]}
+        if classify:
+            entry["mean_accuracy"] = m["mean_accuracy"]
+        log["validation"].append(entry)
+        if m["loss"] < best_loss:
+            best_loss = m["loss"]
+            best_state = {k: v.detach().clone() for k, v in net.state_dict().items()}
+        return entry
+
+    t_start, t_ckpt = time.time(), time.time()
+    wall0 = log["wall_time_s"]
+    bar = tqdm(total=config.steps, initial=step, disable=not progress or rank != 0,
+               desc=f"train {config.task}", unit="step", dynamic_ncols=True)
+    last_val = log["validation"][-1] if log["validation"] else None
+    done_here = 0
+    while step < config.steps:
+        if step % config.validate_every == 0 and (not log["validation"] or
+                                                  log["validation"][-1]["step"] != step):
+            if rank == 0:
+                last_val = validate()
+        idx = data.indices(step)
+        per_rank = config.batch_size // world
+        idx = idx[rank * per_rank:(rank + 1) * per_rank]
+        inputs, target, env = data.batch(idx)
+        for group in opt.param_groups:
+            group["lr"] = _lr_at(config, step)
+        total, mse, ce, _, _ = losses(train_net, inputs, target, env, class_weight,
+                                      classifier_only=classifier_only)
+        opt.zero_grad(set_to_none=True)
+        total.backward()
+        grad_norm = torch.nn.utils.clip_grad_norm_(params, config.clip_norm)
+        opt.step()
+        step += 1
+        done_here += 1
+        log["wall_time_s"] = wall0 + time.time() - t_start
+        log["train"].append({"step": step, "loss": total.item(), "mse": mse.item(),
+                             "ce": ce.item(), "grad_norm": grad_norm.item(),
+                             "lr": opt.param_groups[0]["lr"],
+                             "time_s": round(log["wall_time_s"], 2)})
+        post = {"loss": f"{log['train'][-1]['loss']:.4g}"}
+        if last_val:
+            post["val_err_m"] = f"{last_val['mean_error_m']:.3f}"
+            if "mean_accuracy" in last_val:
+                post["val_acc"] = f"{last_val['mean_accuracy']:.2f}"
+        bar.set_postfix(post, refresh=False)
+        bar.update(1)
+        if time.time() - t_ckpt > 60 * config.checkpoint_minutes:
+            checkpoint()
+            t_ckpt = time.time()
+        if stop_after is not None and done_here >= stop_after and step < config.steps:
+            checkpoint()
+            bar.close()
+            return log
+    bar.close()
+    if rank == 0:
+        if not log["validation"] or log["validation"][-1]["step"] != step:
+            validate()
+        net.load_state_dict(best_state)
+        test = make_trials(config.task, task.test_trials, "test", config.seed)
+        metrics = evaluate_network(net, test, class_weight)
+        log["test"] = summarize(metrics, test.dt)
+        log["test_curves"] = {k: v.tolist() for k, v in metrics.items()
+                              if isinstance(v, np.ndarray)}
+        log["best_validation_loss"] = best_loss
+        checkpoint()
+        save_network(net, config, log, run_dir / "network.pt")
+        with open(run_dir / "log.json", "w") as f:
+            json.dump(log, f, indent=1)
+    if world > 1:
+        torch.distributed.barrier()
+    return log
+
+
+def save_network(net, config: TrainConfig, log: dict, path) -> None:
+    """Save a trained network (parameters, architecture, task) for ``load_pretrained``."""
+    save_atomic({"model": net.state_dict(), "model_config": net.config,
+                 "task": config.task, "config": config.to_dict(),
+                 "class_weight": log.get("class_weight"), "test": log.get("test")}, path)

@@ -42,10 +42,8 @@ def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_
     n_shifts = shifts.shape[0]
     for i in range(m):
         row = activity[i]
-        for u in range(n_units):
-            if row[u] < amin[u]:
-                amin[u] = row[u]
         t = t0 + i
+        touched = False
         for k in range(n_shifts):
             src = t - shifts[k]
             if src < 0:
@@ -56,12 +54,23 @@ def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_
             b -= lo
             counts[k, b] += 1
             acc = sums[k, b]
-            for u in range(n_units):
-                acc[u] += row[u]
-            if want_sq and k == 0:
-                sq = sumsq[b]
+            if k == 0:
+                # the running minimum rides along the first pass over the row
+                touched = True
                 for u in range(n_units):
-                    sq[u] += row[u] * row[u]
+                    v = row[u]
+                    acc[u] += v
+                    amin[u] = min(amin[u], v)
+                if want_sq:
+                    sq = sumsq[b]
+                    for u in range(n_units):
+                        sq[u] += row[u] * row[u]
+            else:
+                for u in range(n_units):
+                    acc[u] += row[u]
+        if not touched:
+            for u in range(n_units):
+                amin[u] = min(amin[u], row[u])
 
 
 @dataclass

@@ -200,6 +200,10 @@ def _epoch_rows(nwb, epoch, path):
             names = [list(map(str, tags)) for tags in table["tags"][:]]
         else:
             names = [[str(i)] for i in table.id[:]]
+    if not names:
+        raise RecordingError(f"`epoch` {epoch!r} cannot be found: the file has no epochs "
+                             "table; pass epoch=None (CLI: --epoch all) to import all the "
+                             "tracked time")
     keep = np.array([epoch in tags for tags in names], dtype=bool)
     if not keep.any():
         known = sorted({t for tags in names for t in tags})
@@ -370,12 +374,12 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
 
 def _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction, head_direction_sign,
               position, position_units, environment, activity, config):
+    epoch_rows = _epoch_rows(nwb, epoch, path)
     time, xy, attrs = _read_position(nwb, position, floor_axes, position_units, path)
     time = check_time(time, "position timestamps")
     hd, hd_attrs = _read_head_direction(nwb, head_direction, attrs["nwb_floor_axes"],
                                         head_direction_sign, time, path)
     attrs.update(hd_attrs)
-    epoch_rows = _epoch_rows(nwb, epoch, path)
     ids, starts, stops, from_trials = _trial_intervals(nwb, epoch_rows, trials,
                                                        _support(nwb, time))
     dt = float(np.median(np.diff(time)))

@@ -134,7 +134,7 @@ def save_recording(rec, path, overwrite=False, *, config=DEFAULTS, storage_optio
     existing store is replaced only after the new one is complete: the old store is
     renamed aside, the new one renamed in, then the old one deleted. Arrays are chunked
     along ``time`` at trial boundaries (see :func:`storage_time_chunk`), compressed
-    (Blosc zstd + byte shuffle) with a CRC32C checksum per chunk; string coords are
+    (Blosc lz4 + byte shuffle) with a CRC32C checksum per chunk; string coords are
     stored as variable-length strings.
 
     Parameters
@@ -192,9 +192,10 @@ def save_recording(rec, path, overwrite=False, *, config=DEFAULTS, storage_optio
             old = dest.parent / f".{dest.name}{_OLD}{uuid.uuid4().hex[:8]}"
             os.rename(dest, old)
             os.rename(tmp, dest)
-            shutil.rmtree(old)
+            shutil.rmtree(old, ignore_errors=True)
         else:
             os.rename(tmp, dest)     # fails if something appeared at dest meanwhile
+        _remove_stale(dest)          # e.g. a copy set aside by an overwrite that died
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)

@@ -162,21 +162,23 @@ def test_processing_behavior_conversion_units_and_touching_trials(tmp_path):
     assert int(rec.activity.sum()) == spikes[0].size          # every spike inside a trial
 
 
-def test_bad_inputs_write_nothing(tmp_path):
+def test_bad_inputs_write_nothing(tmp_path, capsys):
     dest = tmp_path / "out.zarr"
     readme = NWB_PATH.with_suffix(".README.md")
     _write_nwb(tmp_path / "nopos.nwb", position=False, spikes=[np.array([0.5])])
     cases = [
         ([str(readme), str(dest)], "not a readable NWB file"),
-        ([str(tmp_path / "nopos.nwb"), str(dest)], "has no Position"),
-        ([str(NWB_PATH), str(dest), "--epoch", "run"], "`epoch` must be one of"),
+        ([str(tmp_path / "nopos.nwb"), str(dest)], "has no epochs table; pass epoch=None"),
+        ([str(tmp_path / "nopos.nwb"), str(dest), "--epoch", "all"], "has no Position"),
+        ([str(NWB_PATH), str(dest), "--epoch", "run"], "`epoch` must be one of the epochs "
+                                                       "of the file ['sleep', 'wake']"),
     ]
     for argv, message in cases:
-        with pytest.raises(RecordingError, match=message):
-            from_nwb(argv[0], epoch=argv[3] if len(argv) > 3 else "wake")
         assert cli(["import-nwb", *argv]) == 2
-        assert not dest.exists() and sorted(p.name for p in tmp_path.iterdir()) == [
-            "nopos.nwb"]
+        assert message in capsys.readouterr().err
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["nopos.nwb"]
+    with pytest.raises(RecordingError, match="has no Position"):
+        from_nwb(tmp_path / "nopos.nwb", epoch=None)
 
 
 def test_cli_import(tmp_path, capsys):

@@ -1,0 +1,102 @@
+"""A writer killed in the middle of save_recording leaves nothing or the previous store."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from hippo_probe.errors import RecordingError
+from hippo_probe.recording import open_recording, save_recording
+
+from .conftest import make_network_recording
+
+WRITER = textwrap.dedent("""
+    import os, sys, time
+    import numpy as np
+    from hippo_probe.recording import RecordingConfig, from_arrays, save_recording
+    import hippo_probe.recording.store as store
+
+    dest, mode, flag = sys.argv[1:4]
+    n, units = 100_000, 32
+    rng = np.random.default_rng(1)
+    rec = from_arrays(np.arange(n) * 0.01, rng.random((n, 2)),
+                      activity=rng.standard_normal((n, units), dtype=np.float32))
+    if mode == "between-renames":
+        rename = os.rename
+        def slow_rename(a, b):
+            rename(a, b)
+            if str(b).split("/")[-1].startswith(".") and ".old-" in str(b):
+                open(flag, "w").close()
+                time.sleep(600)
+        store.os.rename = slow_rename
+    # small chunks: many files, so the kill lands in the middle of the data
+    save_recording(rec, dest, overwrite=True, config=RecordingConfig(chunk_bytes=2**18))
+""")
+
+
+def _start(tmp_path, dest, mode):
+    script = tmp_path / "writer.py"
+    script.write_text(WRITER)
+    flag = tmp_path / f"{dest.name}.flag"
+    proc = subprocess.Popen([sys.executable, str(script), str(dest), mode, str(flag)])
+    return proc, flag
+
+
+def _kill_when(conditions, timeout=60):
+    """Poll the writers together; SIGKILL each as soon as its condition holds."""
+    pending = dict(conditions)
+    end = time.monotonic() + timeout
+    while pending:
+        for proc, condition in list(pending.items()):
+            if condition():
+                proc.send_signal(signal.SIGKILL)
+                del pending[proc]
+            elif proc.poll() is not None or time.monotonic() > end:
+                for other in pending:
+                    other.kill()
+                pytest.fail(f"a writer ended (rc={proc.returncode}) before the moment to "
+                            "kill it")
+        time.sleep(0.002)
+
+
+def _chunks_written(dest):
+    partial = list(dest.parent.glob(f".{dest.name}.partial-*"))
+    return bool(partial) and any((partial[0] / "activity" / "c").rglob("*"))
+
+
+def test_killed_writer_leaves_previous_store_or_nothing(tmp_path):
+    previous = make_network_recording()
+    replaced = tmp_path / "replaced.zarr"      # killed while writing the new version's data
+    swapped = tmp_path / "swapped.zarr"        # killed between the two renames
+    save_recording(previous, replaced)
+    save_recording(previous, swapped)
+    runs = {dest: _start(tmp_path, dest, mode) for dest, mode in
+            ((replaced, "mid-write"), (swapped, "between-renames"))}
+    _kill_when({runs[replaced][0]: lambda: _chunks_written(replaced),   # mid-data
+                runs[swapped][0]: runs[swapped][1].exists})             # old set aside
+    for proc, _ in runs.values():
+        proc.wait(timeout=30)
+        assert proc.returncode == -signal.SIGKILL
+
+    # the overwritten store is the previous complete version, untouched
+    xr.testing.assert_identical(open_recording(replaced).load(), previous)
+    # killed after setting the old store aside: destination absent, the error says where
+    assert not swapped.exists()
+    with pytest.raises(FileNotFoundError, match="interrupted overwrite left the previous"):
+        open_recording(swapped)
+    # the half-written temp store never opens as a recording
+    (partial,) = tmp_path.glob(".replaced.zarr.partial-*")
+    with pytest.raises(RecordingError, match="half-written"):
+        open_recording(partial)
+    # the next saves clean up what the dead writers left
+    for dest in (replaced, swapped):
+        save_recording(previous, dest, overwrite=True)
+    assert sorted(os.listdir(tmp_path)) == [
+        "replaced.zarr", "swapped.zarr", "swapped.zarr.flag", "writer.py"]
+    assert np.isfinite(open_recording(swapped).activity.values).all()

@@ -34,13 +34,14 @@ import hashlib
 import os
 import shutil
 import tempfile
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
 
 from ._validators import check_nonnegative_int, check_option
-from .world.arena import random_vertices, sample_uniform, wall_distance
+from .world.arena import fan_points, fan_weights, random_vertices, wall_distance
 from .world.config import FEATURES, ArenaConfig, WorldConfig
 from .world.motion import simulate_motion
 from .world.sensors import N_NOISE_DRAWS, sense
@@ -281,46 +282,45 @@ def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *
         raise ValueError(f"`config` is for task {config.name!r}; got task={task!r}")
     world = config.world
     motion = world.motion
-    n_steps, n_fine, n_verts = motion.n_steps, motion.n_steps * motion.substeps, \
-        world.arena.n_vertices
-
-    verts = np.empty((n_trials, n_verts, 2))
-    start = np.zeros((n_trials, 2))
-    heading0 = np.empty(n_trials)
-    speed_noise = np.empty((n_trials, n_fine))
-    turn_noise = np.empty((n_trials, n_fine))
-    draws = np.empty((n_trials, N_NOISE_DRAWS, n_steps))
-    environment = np.empty(n_trials, dtype=np.int64)
+    n_steps = motion.n_steps
     trial_index = np.arange(first, first + n_trials, dtype=np.int64)
-    fixed = fixed_arenas(task, config)
+    verts = np.empty((n_trials, world.arena.n_vertices, 2))
+    start = np.zeros((n_trials, 2))
+    environment = np.empty(n_trials, dtype=np.int64)
+    inputs = np.empty((n_steps, n_trials, len(FEATURES)), dtype=np.float32)
+    position = np.empty((n_steps, n_trials, 2))
+    head_direction = np.empty((n_steps, n_trials))
+    contact = np.empty((n_steps, n_trials), dtype=bool)
 
-    for b, i in enumerate(trial_index):
-        rng = np.random.default_rng(trial_seed(task, split, seed, int(i)))
-        if config.arenas == "novel":
-            verts[b] = random_vertices(rng, world.arena)
-            environment[b] = i
-        else:
-            environment[b] = rng.integers(config.n_arenas) if config.n_arenas > 1 else 0
-            verts[b] = fixed[environment[b]]
-        if config.start == "uniform":
-            start[b] = _uniform_start(verts[b], rng, world.sensors.touch_range)
-        heading0[b] = rng.uniform(-np.pi, np.pi)
-        speed_noise[b] = rng.standard_normal(n_fine)
-        turn_noise[b] = rng.standard_normal(n_fine)
-        draws[b] = rng.standard_normal((N_NOISE_DRAWS, n_steps))
+    # Chunks bound the memory of the random draws; within a chunk, threads share the
+    # per-trial draws (numpy releases the GIL while filling arrays) and the sensing.
+    # Every trial still uses only its own generator, so the result is the same.
+    workers = _n_threads()
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        for lo in range(0, n_trials, _CHUNK):
+            chunk = slice(lo, min(lo + _CHUNK, n_trials))
+            heading0, speed_noise, turn_noise, draws = _draw_trials(
+                pool, workers, task, split, seed, config, trial_index[chunk], verts[chunk],
+                start[chunk], environment[chunk])
+            sim = simulate_motion(verts[chunk], start[chunk], heading0, speed_noise,
+                                  turn_noise, motion, world.sensors)
+            del speed_noise, turn_noise
+            position[:, chunk] = sim["position"].transpose(1, 0, 2)
+            head_direction[:, chunk] = sim["heading"].T
+            contact[:, chunk] = sim["contact"].T
+            out = inputs[:, chunk]
+            list(pool.map(lambda rows: _sense_into(out, rows, sim, world.noise, draws,
+                                                   heading0),
+                          _row_blocks(len(heading0), workers)))
 
-    sim = simulate_motion(verts, start, heading0, speed_noise, turn_noise, motion,
-                          world.sensors)
-    inputs = sense(sim, world.noise, draws, heading0)
-    position = sim["position"]
-    target = position - start[:, None, :] if config.target == "start_relative" else position
+    target = position - start[None] if config.target == "start_relative" else position.copy()
     return TrialBatch(
-        inputs=np.ascontiguousarray(inputs.transpose(1, 0, 2)),
-        target=np.ascontiguousarray(target.transpose(1, 0, 2)),
-        position=np.ascontiguousarray(position.transpose(1, 0, 2)),
+        inputs=inputs,
+        target=target,
+        position=position,
         start=start,
-        head_direction=np.ascontiguousarray(sim["heading"].T),
-        contact=np.ascontiguousarray(sim["contact"].T),
+        head_direction=head_direction,
+        contact=contact,
         environment=environment,
         arena_vertices=verts,
         trial_index=trial_index,
@@ -331,11 +331,93 @@ def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *
     )
 
 
-def _uniform_start(vertices, rng, clearance, tries: int = 16) -> np.ndarray:
-    points = sample_uniform(vertices, rng, tries)
-    dist, _, _ = wall_distance(vertices, points)
-    ok = np.flatnonzero(dist >= clearance)
-    return points[ok[0]] if ok.size else np.zeros(2)
+#: Trials generated at once inside :func:`make_trials` (bounds its working memory: about
+#: 90 kB of random draws per trial).
+_CHUNK = 256
+#: Candidate start points drawn per trial; the first one clear of every wall is taken.
+_START_TRIES = 16
+
+
+def _n_threads() -> int:
+    """Threads for trial generation: as many as the simulation kernel is allowed."""
+    import numba
+
+    return max(1, numba.get_num_threads())
+
+
+def _row_blocks(n: int, parts: int) -> list:
+    """``parts`` contiguous slices covering ``range(n)``."""
+    edges = np.linspace(0, n, max(1, min(parts, n)) + 1).astype(int)
+    return [slice(a, b) for a, b in zip(edges[:-1], edges[1:])]
+
+
+def _draw_trials(pool, workers, task, split, seed, config, index, verts, start, environment):
+    """Every random number of trials ``index``, each from its own generator.
+
+    Fills ``verts``, ``start`` and ``environment`` (rows of the batch) in place and returns
+    the initial headings and the noise arrays. The draws of one trial come in a fixed
+    order from ``trial_seed(task, split, seed, i)``: arena (novel) or arena id (fixed),
+    start candidates (uniform starts, as :func:`~hippo_probe.world.arena.sample_uniform`
+    draws them), initial heading, speed noise, turning noise, sensor noise.
+    """
+    world = config.world
+    motion = world.motion
+    n = len(index)
+    n_fine = motion.n_steps * motion.substeps
+    heading0 = np.empty(n)
+    speed_noise = np.empty((n, n_fine))
+    turn_noise = np.empty((n, n_fine))
+    draws = np.empty((n, N_NOISE_DRAWS, motion.n_steps))
+    uniform = config.start == "uniform"
+    triangle = np.empty((n, _START_TRIES), dtype=np.int64)
+    u = np.empty((n, 2, _START_TRIES))
+    fixed = fixed_arenas(task, config)
+    n_verts = world.arena.n_vertices
+
+    def draw(rows):
+        generators = []
+        for b in range(rows.start, rows.stop):
+            rng = np.random.default_rng(trial_seed(task, split, seed, int(index[b])))
+            if config.arenas == "novel":
+                verts[b] = random_vertices(rng, world.arena)
+                environment[b] = index[b]
+            else:
+                environment[b] = rng.integers(config.n_arenas) if config.n_arenas > 1 else 0
+                verts[b] = fixed[environment[b]]
+            generators.append(rng)
+        # the start's triangle weights of all these trials at once, then the rest
+        weights = fan_weights(verts[rows]) if uniform else None
+        for j, (b, rng) in enumerate(zip(range(rows.start, rows.stop), generators)):
+            if uniform:
+                triangle[b] = rng.choice(n_verts, size=_START_TRIES, p=weights[j])
+                rng.random(out=u[b, 0])
+                rng.random(out=u[b, 1])
+            heading0[b] = rng.uniform(-np.pi, np.pi)
+            rng.standard_normal(out=speed_noise[b])
+            rng.standard_normal(out=turn_noise[b])
+            rng.standard_normal(out=draws[b])
+
+    list(pool.map(draw, _row_blocks(n, workers)))
+    if uniform:
+        candidates = fan_points(verts, triangle, u[:, 0], u[:, 1])
+        start[:] = _clear_starts(verts, candidates, world.sensors.touch_range)
+    return heading0, speed_noise, turn_noise, draws
+
+
+def _sense_into(out, rows, sim, noise, draws, heading0):
+    """Sensed inputs of trials ``rows`` of a simulation, into ``out`` (T, B, F)."""
+    part = {key: value[rows] for key, value in sim.items()}
+    out[:, rows] = sense(part, noise, draws[rows], heading0[rows]).transpose(1, 0, 2)
+
+
+def _clear_starts(vertices, candidates, clearance) -> np.ndarray:
+    """Per trial, the first candidate (B, K, 2) at least ``clearance`` from every wall (the
+    arena's centre if none is)."""
+    dist, _, _ = wall_distance(vertices, candidates)
+    ok = dist >= clearance
+    first = np.argmax(ok, axis=1)
+    chosen = candidates[np.arange(len(candidates)), first]
+    return np.where(ok.any(axis=1)[:, None], chosen, 0.0)
 
 
 # --------------------------------------------------------------------------- cache

@@ -161,10 +161,28 @@ def sample_uniform(vertices, rng, n: int) -> np.ndarray:
     with probability proportional to its area and a point drawn uniformly inside it.
     """
     v = np.asarray(vertices, dtype=float)
-    w = np.roll(v, -1, axis=0)
-    tri_area = 0.5 * (v[:, 0] * w[:, 1] - w[:, 0] * v[:, 1])
-    k = rng.choice(len(v), size=n, p=tri_area / tri_area.sum())
+    k = rng.choice(len(v), size=n, p=fan_weights(v))
     u1, u2 = rng.random(n), rng.random(n)
+    return fan_points(v, k, u1, u2)
+
+
+def fan_weights(vertices) -> np.ndarray:
+    """Area share (..., V) of each triangle (origin, v_k, v_k+1) of polygons (..., V, 2)."""
+    v = np.asarray(vertices, dtype=float)
+    w = np.roll(v, -1, axis=-2)
+    tri_area = 0.5 * (v[..., 0] * w[..., 1] - w[..., 0] * v[..., 1])
+    return tri_area / tri_area.sum(axis=-1, keepdims=True)
+
+
+def fan_points(vertices, k, u1, u2) -> np.ndarray:
+    """Points (..., n, 2) in triangles ``k`` (..., n) of polygons (..., V, 2), from uniform
+    numbers ``u1``, ``u2`` (..., n): ``u1 v_k + u2 v_k+1``, reflected into the triangle
+    when ``u1 + u2 > 1`` (the vectorized second half of :func:`sample_uniform`)."""
+    v = np.asarray(vertices, dtype=float)
+    w = np.roll(v, -1, axis=-2)
     flip = u1 + u2 > 1
-    u1[flip], u2[flip] = 1 - u1[flip], 1 - u2[flip]
-    return u1[:, None] * v[k] + u2[:, None] * w[k]
+    u1, u2 = np.where(flip, 1 - u1, u1), np.where(flip, 1 - u2, u2)
+    k = np.asarray(k)[..., None]
+    vk = np.take_along_axis(v, k, axis=-2)
+    wk = np.take_along_axis(w, k, axis=-2)
+    return u1[..., None] * vk + u2[..., None] * wk

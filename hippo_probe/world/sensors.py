@@ -34,25 +34,28 @@ def sense(motion: dict, noise: NoiseModel, noise_draws: np.ndarray,
     """
     z = noise_draws
     disp = motion["displacement"]
+    heading = motion["heading"]
+    touched = motion["contact"]
+    # each column is written straight into the float32 result (no float64 stack of all)
+    out = np.empty(heading.shape + (len(FEATURES),), dtype=np.float32)
+    col = {name: k for k, name in enumerate(FEATURES)}
+
     gain = 1.0 + noise.speed_sd * z[:, 0]
     rot = noise.rotation_sd * z[:, 1]
     c, s = np.cos(rot), np.sin(rot)
-    dx = gain * (c * disp[..., 0] - s * disp[..., 1])
-    dy = gain * (s * disp[..., 0] + c * disp[..., 1])
+    out[..., col["dx"]] = gain * (c * disp[..., 0] - s * disp[..., 1])
+    out[..., col["dy"]] = gain * (s * disp[..., 0] + c * disp[..., 1])
 
-    heading = motion["heading"]
     hd = heading + noise.head_direction_sd * z[:, 2]
+    out[..., col["cos_hd"]] = np.cos(hd)
+    out[..., col["sin_hd"]] = np.sin(hd)
     previous = np.concatenate([initial_heading[:, None], heading[:, :-1]], axis=1)
-    dhd = wrap_angle(heading - previous) + noise.turn_sd * z[:, 3]
+    out[..., col["dhd"]] = wrap_angle(heading - previous) + noise.turn_sd * z[:, 3]
 
-    touched = motion["contact"]
-    dist = np.where(touched, motion["contact_distance"] + noise.contact_distance_sd * z[:, 4],
-                    0.0)
+    out[..., col["contact"]] = touched
+    out[..., col["contact_distance"]] = np.where(
+        touched, motion["contact_distance"] + noise.contact_distance_sd * z[:, 4], 0.0)
     beta = motion["contact_angle"] + noise.contact_angle_sd * z[:, 5]
-    cos_b = np.where(touched, np.cos(beta), 0.0)
-    sin_b = np.where(touched, np.sin(beta), 0.0)
-
-    columns = (dx, dy, np.cos(hd), np.sin(hd), dhd, touched.astype(float), dist, cos_b,
-               sin_b)
-    assert len(columns) == len(FEATURES)
-    return np.stack(columns, axis=-1).astype(np.float32)
+    out[..., col["cos_beta"]] = np.where(touched, np.cos(beta), 0.0)
+    out[..., col["sin_beta"]] = np.where(touched, np.sin(beta), 0.0)
+    return out

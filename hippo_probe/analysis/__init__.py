@@ -11,6 +11,7 @@ from ._common import AnalysisWarning
 from .classification_accuracy import classification_accuracy
 from .head_direction_tuning import head_direction_tuning
 from .localization_error import localization_error
+from .place_field_stability import place_field_stability
 from .ratemaps import ratemaps
 from .spatial_information import spatial_information
 from .spatial_selectivity import spatial_selectivity
@@ -20,6 +21,7 @@ __all__ = [
     "classification_accuracy",
     "head_direction_tuning",
     "localization_error",
+    "place_field_stability",
     "ratemaps",
     "spatial_information",
     "spatial_selectivity",

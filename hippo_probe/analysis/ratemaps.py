@@ -199,8 +199,11 @@ def warn_nonfinite(rec, res, what):
 
 
 def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent,
-                   shifts=(0,), n_bins=None, want_sq=False):
-    """Everything a rate map (and its shuffles) is made of."""
+                   shifts=(0,), n_bins=None, want_sq=False, groups=None):
+    """Everything a rate map (and its shuffles) is made of.
+
+    ``groups = (codes, labels, dim)`` replaces the grouping given by ``by``.
+    """
     _common.check_recording(rec, ["activity", "position"], why="rate maps")
     sigma = check_number("sigma", RATEMAP.sigma if sigma is None else sigma, low=0,
                          low_inclusive=True)
@@ -210,7 +213,7 @@ def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent
     xy = _positions(rec)
     grid = spatial_grid(rec, bin_size, extent, n_bins=n_bins, xy=xy)
     bins, dropped = position_bins(rec, grid, min_speed=min_speed, xy=xy)
-    codes, labels, dim = _common.group_codes(rec, by)
+    codes, labels, dim = _common.group_codes(rec, by) if groups is None else groups
     n_groups = 1 if labels is None else len(labels)
     n_valid = int((bins >= 0).sum())
     if n_valid == 0:

@@ -13,6 +13,7 @@ from .head_direction_tuning import head_direction_tuning
 from .localization_error import localization_error
 from .place_field_stability import place_field_stability
 from .ratemaps import ratemaps
+from .remapping_similarity import remapping_similarity
 from .spatial_information import spatial_information
 from .spatial_selectivity import spatial_selectivity
 
@@ -23,6 +24,7 @@ __all__ = [
     "localization_error",
     "place_field_stability",
     "ratemaps",
+    "remapping_similarity",
     "spatial_information",
     "spatial_selectivity",
 ]

@@ -9,6 +9,7 @@ accessor (``maps.hp.plot()``), registered by :mod:`hippo_probe.plot`.
 from .. import plot as _plot  # noqa: F401  (registers the ``.hp`` xarray accessor)
 from ._common import AnalysisWarning
 from .classification_accuracy import classification_accuracy
+from .context_cells import context_cells
 from .head_direction_tuning import head_direction_tuning
 from .localization_error import localization_error
 from .place_field_stability import place_field_stability
@@ -20,6 +21,7 @@ from .spatial_selectivity import spatial_selectivity
 __all__ = [
     "AnalysisWarning",
     "classification_accuracy",
+    "context_cells",
     "head_direction_tuning",
     "localization_error",
     "place_field_stability",

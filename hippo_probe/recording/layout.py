@@ -156,17 +156,37 @@ def assemble(*, time, trial, trial_time, trial_id, table, dt, attrs,
     return annotate(xr.Dataset(coords=coords, attrs={**base, **attrs}))
 
 
+def is_trial_aligned(trial, chunks) -> bool:
+    """True when every chunk along ``time`` holds whole trials or a piece of one trial.
+
+    Examples
+    --------
+    >>> is_trial_aligned(np.repeat([0, 1], [4, 4]), (2, 2, 4)), is_trial_aligned(
+    ...     np.repeat([0, 1], [4, 4]), (3, 5))
+    (True, False)
+    """
+    starts = trial_blocks(trial)[0]
+    edges = set(starts.tolist()) | {len(trial)}
+    bounds = np.cumsum((0,) + tuple(chunks))
+    for a, b in zip(bounds[:-1].tolist(), bounds[1:].tolist()):
+        inner = starts[(starts > a) & (starts < b)]
+        if inner.size and not (a in edges and b in edges):
+            return False
+    return True
+
+
 def trial_aligned_chunks(trial, samples_per_chunk):
     """Chunk sizes along ``time`` that never straddle two trials.
 
     Consecutive whole trials are grouped while the group holds at most
-    ``samples_per_chunk`` samples; a trial longer than that is split into near-equal
-    pieces of at most ``samples_per_chunk``.
+    ``samples_per_chunk`` samples; a trial longer than that is cut into pieces of
+    ``samples_per_chunk`` (the last one shorter), which match regular stored chunks of
+    that size when the trial starts on a chunk boundary (e.g. a one-trial session).
 
     Examples
     --------
     >>> trial_aligned_chunks(np.repeat([0, 1, 2, 3], [3, 3, 3, 10]), 7)
-    (6, 3, 5, 5)
+    (6, 3, 7, 3)
     """
     starts, stops, _ = trial_blocks(trial)
     chunks, current = [], 0
@@ -175,9 +195,8 @@ def trial_aligned_chunks(trial, samples_per_chunk):
             chunks.append(current)
             current = 0
         if length > samples_per_chunk:
-            pieces = -(-length // samples_per_chunk)
-            base, extra = divmod(length, pieces)
-            chunks.extend([base + 1] * extra + [base] * (pieces - extra))
+            full, rest = divmod(length, samples_per_chunk)
+            chunks.extend([samples_per_chunk] * full + ([rest] if rest else []))
         else:
             current += length
     if current:

@@ -15,7 +15,7 @@ from zarr.codecs import BloscCodec, Crc32cCodec
 
 from ..errors import RecordingError
 from .config import COMPLETE_MARKER, DEFAULTS
-from .layout import trial_aligned_chunks, trial_blocks
+from .layout import is_trial_aligned, trial_aligned_chunks, trial_blocks
 from .validate import validate
 
 _PARTIAL = ".partial-"   # temp store beside the destination: .NAME.partial-PID-UUID
@@ -313,8 +313,7 @@ def _trial_chunks(rec, config):
                    if "time" in v.dims and v.chunks is not None), None)
     if stored is None:
         return None
-    starts = set(trial_blocks(trial)[0].tolist()) | {trial.size}
-    if set(np.cumsum(stored).tolist()) <= starts:
+    if is_trial_aligned(trial, stored):
         return None
     return trial_aligned_chunks(trial, _samples_per_chunk(rec, config))
 

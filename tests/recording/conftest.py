@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from hippo_probe.recording import annotate, from_arrays, stack_trials, trial_layout, validate
+from hippo_probe.recording.layout import is_trial_aligned
 from hippo_probe.recording.schema import COV
 
 NWB_PATH = __import__("pathlib").Path(__file__).parents[1] / "data" / "A2929-200711.nwb"
@@ -59,6 +60,7 @@ def assert_trial_aligned(trial, chunks):
         whole = ((a == 0 or trial[a - 1] != trial[a])
                  and (b == trial.size or trial[b] != trial[b - 1]))
         assert whole or np.unique(trial[a:b]).size == 1, (a, b)
+    assert is_trial_aligned(trial, chunks)
 
 
 @pytest.fixture

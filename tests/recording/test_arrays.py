@@ -6,6 +6,7 @@ import pytest
 from hippo_probe.errors import RecordingError
 from hippo_probe.recording import (bin_spikes, from_arrays, stack_trials, trial_aligned_chunks,
                                    trial_layout, validate)
+from hippo_probe.recording.layout import is_trial_aligned
 
 from .conftest import assert_trial_aligned
 
@@ -101,5 +102,6 @@ def test_trial_layout_matches_stack_trials_order():
 def test_trial_aligned_chunks_never_straddle_trials():
     trial = np.repeat(np.arange(6), [5, 5, 20, 3, 3, 9])
     chunks = trial_aligned_chunks(trial, 8)
-    assert chunks == (5, 5, 7, 7, 6, 6, 5, 4)
+    assert chunks == (5, 5, 8, 8, 4, 6, 8, 1)
+    assert not is_trial_aligned(trial, (4, 7, 9, 12, 11))
     assert_trial_aligned(trial, chunks)

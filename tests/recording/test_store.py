@@ -104,44 +104,46 @@ def test_invalid_recording_writes_nothing(network_recording, tmp_path):
     assert os.listdir(tmp_path) == []
 
 
-def test_half_written_store_is_refused(network_recording, tmp_path):
+@pytest.fixture
+def saved(network_recording, tmp_path):
     path = tmp_path / "r.zarr"
     save_recording(network_recording, path)
-    meta = json.loads((path / "zarr.json").read_text())
+    return path
+
+
+def _first_chunk(store, name):
+    return next(p for p in (store / name / "c").rglob("*") if p.is_file())
+
+
+def test_half_written_store_is_refused(saved):
+    meta = json.loads((saved / "zarr.json").read_text())
     del meta["attributes"][COMPLETE_MARKER]
-    (path / "zarr.json").write_text(json.dumps(meta))
+    (saved / "zarr.json").write_text(json.dumps(meta))
     with pytest.raises(RecordingError, match="half-written"):
-        open_recording(path)
+        open_recording(saved)
 
 
-def test_missing_chunk_is_refused(network_recording, tmp_path):
-    path = tmp_path / "r.zarr"
-    save_recording(network_recording, path)
-    chunk = next(p for p in (path / "position" / "c").rglob("*") if p.is_file())
-    chunk.unlink()
+def test_missing_chunk_is_refused(saved):
+    _first_chunk(saved, "position").unlink()
     with pytest.raises(RecordingError, match="array `position` has"):
-        open_recording(path)
+        open_recording(saved)
 
 
-def test_garbled_metadata_is_refused(network_recording, tmp_path):
-    path = tmp_path / "r.zarr"
-    save_recording(network_recording, path)
-    (path / "zarr.json").write_text('{"zarr_format": 3, "node_')
+def test_garbled_metadata_is_refused(saved):
+    (saved / "zarr.json").write_text('{"zarr_format": 3, "node_')
     with pytest.raises(RecordingError, match="not a readable zarr store"):
-        open_recording(path)
-    (path / "zarr.json").unlink()
+        open_recording(saved)
+    (saved / "zarr.json").unlink()
     with pytest.raises(RecordingError, match="not a readable zarr store"):
-        open_recording(path)
+        open_recording(saved)
 
 
-def test_corrupted_chunk_fails_its_checksum(network_recording, tmp_path):
-    path = tmp_path / "r.zarr"
-    save_recording(network_recording, path)
-    chunk = next(p for p in (path / "activity" / "c").rglob("*") if p.is_file())
+def test_corrupted_chunk_fails_its_checksum(saved):
+    chunk = _first_chunk(saved, "activity")
     data = bytearray(chunk.read_bytes())
     data[len(data) // 2] ^= 0xFF
     chunk.write_bytes(bytes(data))
-    rec = open_recording(path)                     # lazy: metadata and coords are fine
+    rec = open_recording(saved)                    # lazy: metadata and coords are fine
     with pytest.raises(Exception, match="(?i)checksum|crc"):
         rec.activity.values
 

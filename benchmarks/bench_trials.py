@@ -1,22 +1,25 @@
 """Trial generation speed and memory, per task, and the trial cache's read speed.
 
 Speed is in network steps per second (trials x 500 steps / wall time), generated in
-batches of ``--batch`` trials as the cache does (one block = 1000 trials). Peak memory is
-the highest resident set size above the starting point (sampled every 5 ms; it counts
-numba's allocations, which tracemalloc does not see) and tracemalloc's peak of the Python
-and numpy allocations.
+batches of ``--batch`` trials as the cache does (one block = 1000 trials); best and median
+of ``--repeat`` runs (the machine is shared, so the best run is the closest to the code's
+own speed), with the CPU time of all threads per 1000 trials beside it. Peak memory is
+the growth of the highest resident set size while generating ``--batch`` trials in a fresh
+process (it counts numba's allocations, which tracemalloc does not see) and tracemalloc's
+peak of the Python and numpy allocations.
 
 Peer: the plain-numpy prototype of issue 2 reached about 140,000 steps/s; the target is
 500,000 steps/s (300,000 trials x 500 steps in 5 minutes).
 
-    python benchmarks/bench_trials.py [--trials 3000] [--batch 1000] [--threads 2]
+    python benchmarks/bench_trials.py [--trials 2000] [--batch 1000] [--repeat 3]
+                                      [--threads 2]
 """
 
 import argparse
 import os
 import sys
+import subprocess
 import tempfile
-import threading
 import time
 import tracemalloc
 
@@ -24,32 +27,28 @@ PEER_STEPS_PER_S = 140_000
 TARGET_STEPS_PER_S = 500_000
 
 
-class PeakRSS:
-    """Highest resident set size (bytes) seen while the block runs, above its start."""
+def peak_rss_growth(task, n_trials, batch, threads):
+    """MB by which a fresh process's peak RSS grows while it generates the trials.
 
-    def __init__(self, interval=0.005):
-        import psutil
-
-        self.process = psutil.Process()
-        self.interval = interval
-
-    def __enter__(self):
-        self.start = self.peak = self.process.memory_info().rss
-        self.running = True
-        self.thread = threading.Thread(target=self._watch, daemon=True)
-        self.thread.start()
-        return self
-
-    def _watch(self):
-        while self.running:
-            self.peak = max(self.peak, self.process.memory_info().rss)
-            time.sleep(self.interval)
-
-    def __exit__(self, *exc):
-        self.running = False
-        self.thread.join()
-        self.peak = max(self.peak, self.process.memory_info().rss)
-        self.extra = self.peak - self.start
+    Reads VmHWM from /proc (Linux): unlike ``ru_maxrss``, it is not inherited from the
+    parent process.
+    """
+    code = f"""
+import os
+os.environ["NUMBA_NUM_THREADS"] = "{threads}"
+def peak_kb():
+    with open("/proc/self/status") as f:
+        return int(next(line for line in f if line.startswith("VmHWM")).split()[1])
+from hippo_probe.tasks import make_trials
+make_trials({task!r}, 2, "train", 0)
+before = peak_kb()
+for first in range(0, {n_trials}, {batch}):
+    make_trials({task!r}, min({batch}, {n_trials} - first), "train", 0, first=first)
+print(peak_kb() - before)
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    return int(done.stdout.split()[-1]) / 1e3
 
 
 def generate(task, n_trials, batch):
@@ -61,7 +60,8 @@ def generate(task, n_trials, batch):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=3000, help="trials per task")
+    parser.add_argument("--trials", type=int, default=2000, help="trials per task")
+    parser.add_argument("--repeat", type=int, default=3, help="timed runs per task")
     parser.add_argument("--batch", type=int, default=1000, help="trials per make_trials call")
     parser.add_argument("--threads", type=int, default=2, help="numba threads")
     parser.add_argument("--tasks", nargs="+",
@@ -82,23 +82,28 @@ def main():
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     print(f"peer: plain-numpy prototype ~{PEER_STEPS_PER_S:,} steps/s; "
           f"target {TARGET_STEPS_PER_S:,} steps/s")
-    head = (f"{'task':<14}{'steps/s':>12}{'s per 1000 trials':>19}{'x peer':>8}"
-            f"{'peak RSS (MB)':>15}{'tracemalloc peak (MB)':>23}")
+    head = (f"{'task':<14}{'best steps/s':>14}{'median':>11}{'x peer':>8}"
+            f"{'CPU s/1000 trials':>19}{'+peak RSS (MB)':>15}{'tracemalloc (MB)':>18}")
     print(head)
     print("-" * len(head))
     for task in args.tasks:
         n_steps = task_config(task).world.motion.n_steps
-        with PeakRSS() as rss:
-            t0 = time.perf_counter()
+        walls, cpus = [], []
+        for _ in range(args.repeat):
+            t0, c0 = time.perf_counter(), time.process_time()
             generate(task, args.trials, args.batch)
-            elapsed = time.perf_counter() - t0
+            walls.append(time.perf_counter() - t0)
+            cpus.append(time.process_time() - c0)
+        rss = peak_rss_growth(task, args.batch, args.batch, args.threads)
         tracemalloc.start()
         generate(task, min(args.trials, args.batch), args.batch)
         traced = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
-        rate = args.trials * n_steps / elapsed
-        print(f"{task:<14}{rate:>12,.0f}{1000 * elapsed / args.trials:>19.2f}"
-              f"{rate / PEER_STEPS_PER_S:>8.1f}{rss.extra / 1e6:>15.0f}{traced / 1e6:>23.0f}")
+        best = args.trials * n_steps / min(walls)
+        median = args.trials * n_steps / sorted(walls)[len(walls) // 2]
+        cpu = 1000 * min(cpus) / args.trials
+        print(f"{task:<14}{best:>14,.0f}{median:>11,.0f}{best / PEER_STEPS_PER_S:>8.1f}"
+              f"{cpu:>19.2f}{rss:>15.0f}{traced / 1e6:>18.0f}")
 
     # the on-disk cache: first call generates and writes, the second reads
     task = "generalized"

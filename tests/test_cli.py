@@ -20,7 +20,7 @@ def world_stats(tmp_path_factory):
     printed = io.StringIO()
     capture.setattr(sys, "stdout", printed)
     try:
-        code = main(["world-stats", "--trials", "150", "--split", "validation", "--seed", "1",
+        code = main(["world-stats", "--trials", "120", "--split", "validation", "--seed", "1",
                      "--json", str(out / "stats.json"), "--plot", str(out / "trials.png")])
     finally:
         capture.undo()
@@ -39,7 +39,7 @@ def test_world_stats_prints_a_row_per_task_and_saves_numbers_and_picture(world_s
         numbers = [float(x) for x in row.split()[1:]]
         assert numbers[0] == pytest.approx(stats[task]["mean_speed_m_per_s"], abs=1e-3)
         assert numbers[4] == pytest.approx(stats[task]["pi_error_200s_m"], abs=1e-3)
-        assert stats[task]["n_trials"] == 150
+        assert stats[task]["n_trials"] == 120
     png = (out / "trials.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
 

@@ -17,6 +17,7 @@ def add_commands(sub):
     p.add_argument("--hidden-size", type=int, default=d.hidden_size)
     p.add_argument("--validate-every", type=int, default=d.validate_every)
     p.add_argument("--validation-trials", type=int, default=d.n_validation)
+    p.add_argument("--test-trials", type=int, default=d.n_test)
     p.add_argument("--checkpoint-minutes", type=float, default=d.checkpoint_minutes)
     p.add_argument("--threads", type=int, default=d.threads)
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the task's splits")
@@ -51,7 +52,7 @@ def _train(a):
     config = TrainConfig(task=a.task, n_trials=a.trials, steps=a.steps,
                          batch_size=a.batch_size, lr=a.lr, lr_final=a.lr_final,
                          hidden_size=a.hidden_size, validate_every=a.validate_every,
-                         n_validation=a.validation_trials,
+                         n_validation=a.validation_trials, n_test=a.test_trials,
                          checkpoint_minutes=a.checkpoint_minutes, threads=a.threads,
                          seed=a.seed, init_seed=a.init_seed, class_weight=a.class_weight,
                          init_from=a.init_from, train_only=a.train_only)

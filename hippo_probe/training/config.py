@@ -32,8 +32,8 @@ class TrainConfig:
         Gradient norm clip, 1.0 (LSTMs over 500 steps have rare exploding gradients).
     validate_every : int
         Steps between validations on the validation split.
-    n_validation : int
-        Validation trials (1,000: the whole validation split).
+    n_validation, n_test : int
+        Validation and test trials (1,000 each: the whole splits).
     checkpoint_minutes : float
         Wall time between atomic checkpoints.
     threads : int
@@ -62,6 +62,7 @@ class TrainConfig:
     clip_norm: float = 1.0
     validate_every: int = 250
     n_validation: int = 1000
+    n_test: int = 1000
     checkpoint_minutes: float = 3.0
     threads: int = 1
     seed: int = 0
@@ -75,7 +76,7 @@ class TrainConfig:
         check_option("task", self.task, TASKS)
         if self.n_trials is not None:
             check_positive("n_trials", self.n_trials, integer=True)
-        for name in ("steps", "batch_size", "validate_every", "n_validation", "threads",
+        for name in ("steps", "batch_size", "validate_every", "n_validation", "n_test", "threads",
                      "hidden_size"):
             check_positive(name, getattr(self, name), integer=True)
         for name in ("lr", "lr_final", "clip_norm", "checkpoint_minutes"):

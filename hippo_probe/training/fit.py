@@ -201,7 +201,7 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
     step, best_loss, best_state = 0, math.inf, None
     if ckpt_path.exists():
         ckpt = load(ckpt_path)
-        if ckpt["config"] != config.to_dict():
+        if TrainConfig.from_dict(ckpt["config"]) != config:
             raise ValueError(f"`run_dir` {str(run_dir)!r} holds a checkpoint of another "
                              f"configuration; use a new directory")
         net.load_state_dict(ckpt["model"])
@@ -285,7 +285,7 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
         if not log["validation"] or log["validation"][-1]["step"] != step:
             validate()
         net.load_state_dict(best_state)
-        test = make_trials(config.task, task.test_trials, "test", config.seed)
+        test = make_trials(config.task, config.n_test, "test", config.seed)
         metrics = evaluate_network(net, test, class_weight)
         log["test"] = summarize(metrics, test.dt)
         log["test_curves"] = {k: v.tolist() for k, v in metrics.items()

@@ -1,0 +1,59 @@
+import numpy as np
+import pytest
+import torch
+
+import hippo_probe as hp
+from hippo_probe.model import ModelConfig, Navigator, input_scale_for
+from hippo_probe.tasks import task_config
+
+
+@pytest.fixture(scope="module")
+def specialized_batch():
+    return hp.tasks.make_trials("specialized", 3, "test", 0)
+
+
+def test_input_scale_makes_inputs_order_one(specialized_batch):
+    scale = np.array(input_scale_for(task_config("specialized").world))
+    scaled = specialized_batch.inputs / scale
+    rms = np.sqrt((scaled ** 2).mean(axis=(0, 1)))
+    dx = specialized_batch.features.index("dx")
+    assert 0.3 < rms[dx] < 3
+
+
+def test_record_network_recording(specialized_batch):
+    torch.manual_seed(0)
+    net = Navigator(ModelConfig(hidden_size=8, n_classes=100))
+    net.task = "specialized"
+    rec = hp.record(net, specialized_batch)
+    hp.validate(rec)
+    T, B = specialized_batch.n_steps, len(specialized_batch)
+    assert rec.sizes["time"] == T * B and rec.sizes["unit"] == 8
+    assert rec.activity.dtype == np.float32
+    # class probabilities sum to one; readout weights are the classifier's
+    np.testing.assert_allclose(rec.class_probability.sum("environment_id"), 1, atol=1e-5)
+    np.testing.assert_array_equal(rec.readout_weight.values,
+                                  net.classifier.weight.detach().numpy())
+    # activity of trial 1 equals running the network on that trial alone
+    _, _, h = net(torch.from_numpy(specialized_batch.inputs[:, 1:2]))
+    trial1 = rec.activity.where(rec.trial == specialized_batch.trial_index[1], drop=True)
+    np.testing.assert_allclose(trial1.values, h[:, 0].detach().numpy(), atol=1e-6)
+    np.testing.assert_array_equal(rec.environment_id.values, np.arange(100))
+
+
+def test_record_generalized_estimate_in_arena_frame():
+    batch = hp.tasks.make_trials("generalized", 2, "test", 0)
+    net = Navigator(ModelConfig(hidden_size=8))
+    rec = hp.record(net, batch)
+    xy, _, _ = net(torch.from_numpy(batch.inputs))
+    expected = xy[:, 0].detach().numpy() + batch.start[0]
+    got = rec.estimate.values[: batch.n_steps]
+    np.testing.assert_allclose(got, expected, atol=1e-5)
+    assert "class_probability" not in rec
+
+
+def test_record_rejects_bad_baselines(specialized_batch):
+    net = Navigator(ModelConfig(hidden_size=4))
+    with pytest.raises(ValueError, match="baselines"):
+        hp.record(net, specialized_batch, baselines={"estimate_xyz": np.zeros((500, 3, 2))})
+    with pytest.raises(ValueError, match=r"must have shape \(500, 3"):
+        hp.record(net, specialized_batch, baselines={"estimate_pf": np.zeros((10, 3, 2))})

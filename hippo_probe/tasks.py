@@ -308,10 +308,9 @@ def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *
             position[:, chunk] = sim["position"].transpose(1, 0, 2)
             head_direction[:, chunk] = sim["heading"].T
             contact[:, chunk] = sim["contact"].T
-            out = inputs[:, chunk]
-            list(pool.map(lambda rows: _sense_into(out, rows, sim, world.noise, draws,
-                                                   heading0),
-                          _row_blocks(len(heading0), workers)))
+            sense_rows = functools.partial(_sense_into, inputs[:, chunk], sim=sim,
+                                           noise=world.noise, draws=draws, heading0=heading0)
+            list(pool.map(sense_rows, _row_blocks(len(heading0), workers)))
 
     target = position - start[None] if config.target == "start_relative" else position.copy()
     return TrialBatch(

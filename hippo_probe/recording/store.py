@@ -92,9 +92,9 @@ def _prepare(rec, time_chunk):
         rec = rec.assign({k: v for k, v in text.items() if k in rec.data_vars})
     rec = rec.assign_coords({name: coord.variable.compute()
                              for name, coord in rec.coords.items() if coord.chunks is not None})
-    return rec.assign({name: var.chunk({"time": time_chunk})
-                       for name, var in rec.data_vars.items()
-                       if var.chunks is not None and "time" in var.dims})
+    return rec.assign({name: var.chunk({dim: time_chunk if dim == "time" else -1
+                                        for dim in var.dims})
+                       for name, var in rec.data_vars.items() if var.chunks is not None})
 
 
 def _write(rec, store, config, storage_options=None):

@@ -167,3 +167,9 @@ def test_select_trials_lazy(network_recording, tmp_path):
         select_trials(rec, trials=[4])
     with pytest.raises(RecordingError, match="no trial matches"):
         select_trials(rec, trials=[5], environments=[1])
+
+
+def test_saving_dask_chunked_along_units(network_recording, tmp_path):
+    lazy = network_recording.chunk({"time": 37, "unit": 5})
+    save_recording(lazy, tmp_path / "r.zarr")
+    xr.testing.assert_identical(open_recording(tmp_path / "r.zarr").load(), network_recording)

@@ -155,8 +155,8 @@ def correlation_dimension(rec_or_array, *, max_points=None, theiler=None, transi
     >>> import numpy as np
     >>> x = np.random.default_rng(0).uniform(size=(2000, 2)) @ np.eye(2, 10)
     >>> res = correlation_dimension(x)
-    >>> round(res.attrs["dimension"], 1)
-    2.0
+    >>> bool(abs(res.attrs["dimension"] - 2.0) < 0.2)
+    True
     """
     is_rec = isinstance(rec_or_array, xr.Dataset)
     max_points = check_number("max_points", CFG.max_points if max_points is None

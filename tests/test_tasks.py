@@ -3,6 +3,7 @@
 import hashlib
 from dataclasses import fields, replace
 
+import numba
 import numpy as np
 import pytest
 import zarr
@@ -49,6 +50,19 @@ def test_the_same_seed_gives_identical_trials_however_batched(task):
     # ... and another seed gives other trials
     other = make_trials(task, 10, "train", 4)
     assert not set(trial_digests(whole)) & set(trial_digests(other))
+
+
+def test_trials_do_not_depend_on_chunking_or_threads(monkeypatch):
+    """make_trials works in chunks, on as many threads as numba may use: neither matters."""
+    whole = {task: make_trials(task, 7, "test", 1) for task in TASKS}
+    monkeypatch.setattr(tasks, "_CHUNK", 3)
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        for task in TASKS:
+            assert_same_batch(make_trials(task, 7, "test", 1), whole[task])
+    finally:
+        numba.set_num_threads(threads)
 
 
 @pytest.mark.parametrize("task", TASKS)

@@ -1,0 +1,90 @@
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+import hippo_probe as hp  # noqa: E402
+from hippo_probe import plot  # noqa: E402
+
+from .conftest import hd_cell_recording, place_cell_recording, two_environment_recording  # noqa: E402,E501
+
+
+@pytest.fixture(autouse=True)
+def _close():
+    yield
+    plt.close("all")
+
+
+@pytest.fixture(scope="module")
+def place():
+    return place_cell_recording(np.array([[0.2, 0.2], [-0.2, 0.1], [0.0, -0.3]]),
+                                n_samples=6000)
+
+
+def test_ratemaps_plot_themselves_with_arena_outline(place):
+    maps = hp.ratemaps(place, bin_size=0.05)
+    fig = maps.hp.plot()
+    assert isinstance(fig, Figure)
+    panels = [ax for ax in fig.axes if ax.images]
+    assert len(panels) == 3
+    # the square arena's outline is drawn on every panel
+    outline = panels[0].get_lines()[0].get_xydata()
+    np.testing.assert_allclose(np.abs(outline), 0.5)
+    assert fig.axes[-1].get_ylabel() == "mean activity (Hz)"  # colour bar
+    assert panels[0].get_xlabel() == "x position (m)"
+    assert panels[0].get_ylabel() == "y position (m)"
+
+
+def test_grouped_maps_plot_one_group():
+    rec = two_environment_recording(n_units=4, n_trials=4, samples_per_trial=800)
+    maps = hp.ratemaps(rec, bin_size=0.1, by="environment")
+    fig = maps.hp.plot(group=1)
+    assert "environment 1" in fig._suptitle.get_text()
+
+
+def test_hd_polar_titles_carry_r_and_direction():
+    rec = hd_cell_recording(np.array([0.5, -1.0]), np.array([4.0, 2.0]), n_samples=4000)
+    res = hp.head_direction_tuning(rec, n_shuffles=0)
+    fig = res.hp.plot()
+    titles = [ax.get_title() for ax in fig.axes]
+    assert any("R=0." in t for t in titles)
+    assert "head direction (rad)" in fig._suptitle.get_text()
+
+
+def test_remapping_cumulative_plot():
+    rec = two_environment_recording(n_units=6, n_trials=6, samples_per_trial=800)
+    fig = hp.remapping_similarity(rec).hp.plot()
+    ax = fig.axes[0]
+    assert len(ax.get_lines()) == 4
+    assert ax.get_xlabel() == "population-vector correlation"
+    assert ax.get_ylabel() == "cumulative fraction"
+
+
+def test_per_unit_results_plot_as_distributions(place):
+    for res in (hp.spatial_information(place, bin_size=0.1),
+                hp.spatial_selectivity(place, bin_size=0.1)):
+        fig = res.hp.plot()
+        assert fig.axes[0].get_ylabel() == "cumulative fraction"
+        assert fig.axes[0].get_xlabel()
+
+
+def test_error_curves_and_unknown_results(place):
+    rec = place.copy()
+    rec["estimate"] = rec.position + 0.05
+    rec["estimate"].attrs = {"units": "m", "long_name": "network estimate"}
+    fig = hp.localization_error(rec).hp.plot()
+    assert [ax.get_ylabel() for ax in fig.axes] == [
+        "Euclidean error (m)", "radial error (m)", "angular error (rad)"]
+    assert fig.axes[0].get_xlabel() == "time in trial (s)"
+    with pytest.raises(ValueError, match="no hippo_probe plot"):
+        place.activity.hp.plot()
+
+
+def test_correlation_sum_plot():
+    x = np.random.default_rng(0).uniform(size=(800, 2)) @ np.eye(2, 8)
+    fig = plot.plot_result(hp.correlation_dimension(x))
+    assert fig.axes[0].get_title().startswith("D = ")

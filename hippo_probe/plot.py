@@ -81,8 +81,7 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
     x, y = maps["x"].values, maps["y"].values
     half = (x[1] - x[0]) / 2 if len(x) > 1 else 0.5
     ext = (x[0] - half, x[-1] + half, y[0] - half, y[-1] + half)
-    colours = plt.get_cmap(cmap).copy()
-    colours.set_bad("white")  # unvisited bins
+    colours = plt.get_cmap(cmap).with_extremes(bad="white")  # unvisited bins
     pad = 0.04 * max(ext[1] - ext[0], ext[3] - ext[2])
     for ax, u in zip(axes.flat, maps["unit"].values):
         m = maps.sel(unit=u)

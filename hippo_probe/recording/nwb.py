@@ -102,7 +102,10 @@ def _axes_table(series_by_name):
             table[name] = (series, None)
             continue
         for j in range(series.data.shape[1]):
-            label = ("xyz"[j] if series.data.shape[1] <= 3 else str(j)) if alone else f"{name}[{j}]"
+            if alone:
+                label = "xyz"[j] if series.data.shape[1] <= 3 else str(j)
+            else:
+                label = f"{name}[{j}]"
             table[label] = (series, j)
     return table
 

@@ -23,7 +23,8 @@ def make_network_recording(n_steps=40, n_trials=6, n_units=12, n_env=3, seed=0):
     prob = rng.random((n_steps * n_trials, n_env))
     rec["activity"] = ("time", "unit"), np.tanh(
         stack_trials(rng.standard_normal((n_steps, n_trials, n_units)))).astype(np.float32)
-    rec["position"] = ("time", "space"), stack_trials(rng.uniform(-0.3, 0.3, (n_steps, n_trials, 2)))
+    rec["position"] = ("time", "space"), stack_trials(
+        rng.uniform(-0.3, 0.3, (n_steps, n_trials, 2)))
     rec["estimate"] = ("time", "space"), rec.position.values + 0.01
     rec["head_direction"] = "time", stack_trials(angle)
     rec["contact"] = "time", stack_trials(rng.random((n_steps, n_trials)) < 0.05)
@@ -45,8 +46,10 @@ def make_animal_recording(n=3000, seed=0):
     position = rng.uniform(0, 80, (time.size, 2))
     position[100:120] = np.nan
     spikes = [np.sort(rng.uniform(0, 36, 200)) for _ in range(4)]
-    return from_arrays(time, position, spike_times=spikes, head_direction=rng.uniform(-4, 4, time.size),
-                       trial=np.repeat([0, 1, 2], 1000)[:n], environment=np.repeat([0, 0, 1], 1000)[:n],
+    return from_arrays(time, position, spike_times=spikes,
+                       head_direction=rng.uniform(-4, 4, time.size),
+                       trial=np.repeat([0, 1, 2], 1000)[:n],
+                       environment=np.repeat([0, 0, 1], 1000)[:n],
                        unit={"unit": np.array(["u1", "u2", "u3", "u4"]),
                              "region": np.array(["ca1", "ca1", "adn", "adn"])},
                        position_units="cm", subject="m1", species="Mus musculus")

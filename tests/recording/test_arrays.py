@@ -52,7 +52,8 @@ def test_from_arrays_activity_and_unit_table():
 
 
 BAD = {
-    "mismatched lengths": (dict(position=np.zeros((9, 2))), ValueError, "`position` must have shape"),
+    "mismatched lengths": (dict(position=np.zeros((9, 2))), ValueError,
+                           "`position` must have shape"),
     "non-monotonic time": (dict(time=np.r_[0, 2, 1, 3:10]), RecordingError,
                            "`time` must be strictly increasing"),
     "activity with NaN": (dict(activity=np.r_[np.nan, np.ones(9)]), ValueError,

@@ -177,8 +177,8 @@ def test_bad_inputs_write_nothing(tmp_path, capsys):
         assert cli(["import-nwb", *argv]) == 2
         assert message in capsys.readouterr().err
         assert sorted(p.name for p in tmp_path.iterdir()) == ["nopos.nwb"]
-    with pytest.raises(RecordingError, match="has no Position"):
-        from_nwb(tmp_path / "nopos.nwb", epoch=None)
+    with pytest.raises(RecordingError, match="not a readable NWB file"):
+        from_nwb(readme)
 
 
 def test_cli_import(tmp_path, capsys):

@@ -7,7 +7,7 @@ from hippo_probe.analysis.correlation_dimension import pair_counts
 
 from .conftest import make_recording
 
-N = 3000
+N = 2000
 SIERPINSKI = np.log(3) / np.log(2)
 
 

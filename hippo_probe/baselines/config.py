@@ -1,0 +1,158 @@
+"""Every constant of the Bayesian baselines, in one place, with its reason.
+
+The baselines invert the world's generative model
+(:class:`~hippo_probe.world.config.NoiseModel`, :class:`~hippo_probe.world.config.MotionConfig`,
+:class:`~hippo_probe.world.config.SensorConfig`); those numbers are imported from the task's
+configuration, never repeated here. What lives here are the baselines' own choices: particle
+counts, resampling, and the few approximations of the contact process, each with the
+measurement that justifies it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .._validators import check_number, check_positive
+
+
+@dataclass(frozen=True)
+class ContactModelConfig:
+    """How the baselines read a boundary contact.
+
+    A contact step reports a wall's inward normal only through the heading: the touched
+    wall's normal angle is ``hd + beta - pi`` (the end-of-step heading is the reflected
+    one), and the end-of-step position lies ``d + u a`` from that wall with ``u`` in
+    [0, 1] the unknown fraction of the step left after the contact (see
+    :mod:`hippo_probe.baselines.contact`).
+
+    Attributes
+    ----------
+    distance_slop_sd : float
+        0.005 m, added in quadrature to the sensor's distance noise: the spread of the
+        end-of-step distance around the uniform-retreat model (speed changes and turning
+        within the step, walls touched near their ends). Measured on 23,000 noise-free
+        contacts of the generalized task: 90% of retreats lie inside the modelled span,
+        and the 10% beyond it exceed it by a few mm.
+    outlier_probability : float
+        0.01: probability that a contact is not explained by one reflection off one wall
+        (double contacts in corners, large turns after the reflection). Measured: about
+        1% of noise-free contacts retreat more than 2.7 times the modelled span. Such a
+        contact keeps a likelihood floor instead of killing every particle.
+    angle_cutoff : float
+        6 standard deviations: walls whose normal disagrees more with the sensed angle get
+        zero angle likelihood, so the particle kernels skip them (exp(-18) ~ 1e-8 of the
+        peak; the outlier floor dominates long before).
+    single_hypothesis_gate : float
+        2 standard deviations: the single-hypothesis baseline resets onto walls whose
+        normal agrees this well with the sensed angle (95% of true walls).
+    """
+
+    distance_slop_sd: float = 0.005
+    outlier_probability: float = 0.01
+    angle_cutoff: float = 6.0
+    single_hypothesis_gate: float = 2.0
+
+    def __post_init__(self):
+        check_number("distance_slop_sd", self.distance_slop_sd, low=0, low_inclusive=True)
+        check_number("outlier_probability", self.outlier_probability, low=0,
+                     low_inclusive=True, high=1, high_inclusive=False)
+        check_positive("angle_cutoff", self.angle_cutoff)
+        check_positive("single_hypothesis_gate", self.single_hypothesis_gate)
+
+
+@dataclass(frozen=True)
+class ParticleFilterConfig:
+    """The particle filters (oracular PF and PF-SLAM).
+
+    Attributes
+    ----------
+    n_particles : int
+        1,000 particles per trial for the oracular PF (the study's and the issue's count).
+    slam_particles : int
+        10,000 particles per trial for PF-SLAM: 100 per arena hypothesis at the start, the
+        top of the issue's 100-10,000 range, so the true arena keeps particles until its
+        evidence accumulates.
+    resample_threshold : float
+        0.5: systematic resampling when the effective sample size
+        ``1 / sum(w_i^2)`` falls below half the particle count, the usual rule (Doucet &
+        Johansen 2009, "A tutorial on particle filtering and smoothing", sec. 3.5).
+    min_gain : float
+        0.05: lower clip of the sampled speed gain ``1 + e_s`` when the proposal divides
+        the sensed displacement by it (``1 + e_s < 0.05`` has probability ~1e-7 at
+        ``speed_sd = 0.18``); keeps a particle from jumping across the arena.
+    """
+
+    n_particles: int = 1000
+    slam_particles: int = 10_000
+    resample_threshold: float = 0.5
+    min_gain: float = 0.05
+
+    def __post_init__(self):
+        check_positive("n_particles", self.n_particles, integer=True)
+        check_positive("slam_particles", self.slam_particles, integer=True)
+        check_number("resample_threshold", self.resample_threshold, low=0, high=1)
+        check_number("min_gain", self.min_gain, low=0, high=1, high_inclusive=False)
+
+
+@dataclass(frozen=True)
+class NaiveBayesConfig:
+    """The naive-Bayes baseline (path integration times a learnt prior over targets).
+
+    Attributes
+    ----------
+    prior_trials : int
+        2,000 training-split trials estimate the prior of the target at each time step
+        (~22,000 samples per step with the time window below).
+    prior_split : str
+        "train": the prior is learnt from the data a network trains on, never from the
+        split it is evaluated on.
+    grid_size : int
+        64 x 64 grid cells over the range of the training targets (2.8 cm cells for the
+        0.33 m arenas, 5 cm for the 1 m arena); the prior is a Gaussian kernel density
+        with one kernel per cell of width one cell, so the result is smooth in the
+        estimate and tends to path integration when its variance is below a cell.
+    time_window : int
+        5: the prior at step t pools the targets of steps t-5 ... t+5 (4 s), which
+        changes little over that time once the start is seconds past.
+    """
+
+    prior_trials: int = 2000
+    prior_split: str = "train"
+    grid_size: int = 64
+    time_window: int = 5
+
+    def __post_init__(self):
+        check_positive("prior_trials", self.prior_trials, integer=True)
+        check_number("grid_size", self.grid_size, low=4, low_inclusive=True, integer=True)
+        check_number("time_window", self.time_window, low=0, low_inclusive=True,
+                     integer=True)
+
+
+@dataclass(frozen=True)
+class BaselineConfig:
+    """Everything that defines the baselines.
+
+    Attributes
+    ----------
+    start_prior_samples : int
+        20,000 Monte Carlo draws give the mean of an arena's start prior (where path
+        integration starts when the start is unknown) to ~3 mm in the 1 m arena.
+    """
+
+    contact: ContactModelConfig = field(default_factory=ContactModelConfig)
+    particle_filter: ParticleFilterConfig = field(default_factory=ParticleFilterConfig)
+    naive_bayes: NaiveBayesConfig = field(default_factory=NaiveBayesConfig)
+    start_prior_samples: int = 20_000
+
+    def __post_init__(self):
+        check_positive("start_prior_samples", self.start_prior_samples, integer=True)
+
+
+#: Tags that keep each method's random numbers apart from the others' and from the world's:
+#: trial ``i`` of a method draws from ``SeedSequence([seed, STREAM_TAGS[method], i])``, so
+#: its result does not depend on how trials are batched or threaded.
+STREAM_TAGS = {"particle_filter": 7001, "pf_slam": 7002, "start_prior": 7003}
+
+
+#: Times (s) at which baseline errors are reported (those of ``world-stats``).
+REPORT_TIMES = (50.0, 100.0, 200.0)

@@ -1,12 +1,63 @@
-"""``hippo-probe main``: the README's main job."""
+"""``hippo-probe main`` (the README's main job) and ``hippo-probe figures``."""
 
+import importlib.util
+import time
 from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+FIGURES = ("fig2", "fig3", "fig4", "fig5")
 
 
 def add_commands(sub):
-    p = sub.add_parser("main", help="the README's main job (world statistics, figures)")
+    p = sub.add_parser("main", help="the README's main job: world statistics and every "
+                                    "paper figure, into one folder")
     p.add_argument("--out", default="figures", help="output folder (default: figures/)")
+    p.add_argument("--size", default="full", choices=["tiny", "full", "paper"])
     p.set_defaults(run=_main)
+    f = sub.add_parser("figures", help="regenerate the paper figures and RESULTS.md")
+    f.add_argument("--out", default="figures")
+    f.add_argument("--size", default="full", choices=["tiny", "full", "paper"],
+                   help="full: minutes on 2 cores; paper: the study's scale (hours)")
+    f.add_argument("--only", nargs="*", choices=FIGURES, default=None)
+    f.set_defaults(run=_figures)
+
+
+def _load(name):
+    path = ROOT / "paper_figures" / f"{name}.py"
+    if not path.exists():
+        raise FileNotFoundError(f"{path} not found: `hippo-probe figures` runs from a clone "
+                                f"of the repository (the scripts are not package data)")
+    spec = importlib.util.spec_from_file_location(f"paper_figures.{name}", path,
+                                                  submodule_search_locations=None)
+    module = importlib.util.module_from_spec(spec)
+    import sys
+    sys.path.insert(0, str(path.parent))
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        sys.path.remove(str(path.parent))
+    return module
+
+
+def _figures(args):
+    common = _load("_common")
+    cfg = common.CONFIGS[args.size]
+    out = Path(args.out)
+    t_all = time.time()
+    for name in args.only or FIGURES:
+        t0 = time.time()
+        print(f"== {name} ({args.size}) ==")
+        _load(name).make(cfg, out)
+        print(f"   {name} done in {time.time() - t0:.0f} s")
+    results = _load("results")
+    import sys
+    argv = sys.argv
+    sys.argv = ["results.py", "--figures", str(out)]
+    try:
+        results.main()
+    finally:
+        sys.argv = argv
+    print(f"all figures in {out}/ ({time.time() - t_all:.0f} s)")
 
 
 def _main(args):
@@ -19,3 +70,4 @@ def _main(args):
     fig = plot_example_trials()
     fig.savefig(out / "example_trials.png", dpi=120)
     print(f"saved {out / 'example_trials.png'}")
+    _figures(args.__class__(out=args.out, size=args.size, only=None))

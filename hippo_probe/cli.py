@@ -15,6 +15,7 @@ import sys
 _COMMAND_MODULES = (
     "hippo_probe.world._cli",
     "hippo_probe.training._cli",
+    "hippo_probe.model._cli",
     "hippo_probe.baselines._cli",
     "hippo_probe.recording._cli",
     "hippo_probe._main",

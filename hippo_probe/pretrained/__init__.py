@@ -41,11 +41,15 @@ def load_pretrained(name: str):
     >>> net.task                                            # doctest: +SKIP
     'generalized'
     """
+    from ..model.config import ModelConfig
     from ..model.navigator import Navigator
     from ..training.checkpoint import load
 
     obj = load(resolve_network_file(name))
-    net = Navigator(obj["model_config"])
+    config = obj["model_config"]
+    if isinstance(config, dict):
+        config = ModelConfig(**{**config, "input_scale": tuple(config["input_scale"])})
+    net = Navigator(config)
     net.load_state_dict(obj.get("best_model") or obj["model"])
     net.task = obj.get("task")
     net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test")}

@@ -1,0 +1,52 @@
+"""Ship a training run's best network as a pretrained network."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import torch
+
+from ..pretrained import HERE
+from .checkpoint import load, save_atomic
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {k: _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if hasattr(obj, "__dataclass_fields__"):
+        return _jsonable(vars(obj))
+    return obj
+
+
+def export_network(run_dir, name: str, dest=None) -> list:
+    """Write ``<dest>/<name>.pt`` (best parameters so far, architecture, task, test
+    metrics if the run finished) and ``<dest>/<name>.log.json`` (the training log).
+
+    Works on a finished run (``network.pt``) or on a run in progress (its last
+    checkpoint's best parameters); the log says which (``finished``, ``steps_done``).
+    """
+    run_dir = Path(run_dir)
+    dest = Path(dest or HERE)
+    dest.mkdir(parents=True, exist_ok=True)
+    ckpt = load(run_dir / "checkpoint.pt")
+    log = dict(ckpt["log"])
+    finished = ckpt["step"] >= ckpt["config"]["steps"] and "test" in log
+    state = ckpt["best_model"] or ckpt["model"]
+    state = {k: v.detach().clone().contiguous() for k, v in state.items()}
+    # plain dicts and tensors only: a shipped file must not depend on class names
+    network = {"model": state, "model_config": _jsonable(ckpt["model_config"]),
+               "task": ckpt["task"],
+               "config": ckpt["config"], "class_weight": log.get("class_weight"),
+               "test": log.get("test"), "steps_done": ckpt["step"], "finished": finished}
+    pt = dest / f"{name}.pt"
+    save_atomic(network, pt)
+    log.update(steps_done=ckpt["step"], finished=finished,
+               best_validation_loss=ckpt["best_loss"])
+    js = dest / f"{name}.log.json"
+    tmp = js.with_suffix(".tmp")
+    tmp.write_text(json.dumps(_jsonable(log), indent=0))
+    tmp.replace(js)
+    return [pt, js]

@@ -1,0 +1,224 @@
+"""Shared machinery of the paper-figure scripts: configurations, cached recordings, output.
+
+Every figure reads recordings of the shipped networks (``hippo_probe/pretrained``) with
+the baselines' estimates added, made once and cached under ``recordings/paper-<size>/``.
+A cached recording is reused only if it was made from the same network file and the same
+configuration (both hashed into its attrs); otherwise it is rebuilt.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import time
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+import hippo_probe as hp  # noqa: E402
+from hippo_probe.tasks import make_trials, task_config  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@dataclass(frozen=True)
+class FigureConfig:
+    """Sizes of the data behind the figures.
+
+    ``full`` (the default) regenerates the figures in minutes on 2 CPU cores; ``tiny``
+    (tests) runs every code path on a handful of trials; ``paper`` is the study's scale
+    (1,000 test trials, PF-SLAM up to 10,000 particles), for the documented rebuild.
+    """
+
+    name: str = "full"
+    trials: int = 200            # test trials per recording
+    particles: int = 1000        # oracular particle filter
+    slam_particles: tuple = (100, 1000, 10000)
+    slam_trials: int = 20
+    map_trials: int = 60         # trials of the two-arena recordings (rate maps)
+    remap_trials: int = 400      # specialized trials for remapping / selectivity
+    dimension_samples: int = 4000
+    seed: int = 0
+
+    @property
+    def cache(self) -> Path:
+        return ROOT / "recordings" / f"paper-{self.name}"
+
+
+CONFIGS = {
+    "full": FigureConfig(),
+    "tiny": FigureConfig(name="tiny", trials=4, particles=50, slam_particles=(20, 50),
+                         slam_trials=2, map_trials=6, remap_trials=12,
+                         dimension_samples=300),
+    "paper": FigureConfig(name="paper", trials=1000, slam_trials=100, map_trials=100,
+                          remap_trials=1000, dimension_samples=10000),
+}
+
+
+def parse_args(description: str):
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("--size", choices=sorted(CONFIGS), default="full",
+                    help="data size (default full: minutes on 2 cores)")
+    ap.add_argument("--out", default=str(ROOT / "figures"), help="output folder")
+    a = ap.parse_args()
+    return CONFIGS[a.size], Path(a.out)
+
+
+# ----------------------------------------------------------------------- networks
+def network_file(name: str) -> Path:
+    from hippo_probe.pretrained import resolve_network_file
+    return resolve_network_file(name)
+
+
+def _digest(*parts) -> str:
+    h = hashlib.sha1()
+    for p in parts:
+        h.update(p if isinstance(p, bytes) else repr(p).encode())
+    return h.hexdigest()[:12]
+
+
+# ----------------------------------------------------------------------- baselines
+def baseline_estimates(batch, which, n_particles: int) -> dict:
+    """Baselines' estimates in the ARENA frame (as recordings hold them), by name.
+
+    ``which`` among "pi", "sh", "nb", "pf". The PF also gives ``pf_cov``.
+    """
+    from hippo_probe import baselines as bl
+
+    to_arena = (lambda e: e + batch.start[None]) \
+        if task_config(batch.task).target == "start_relative" else (lambda e: e)
+    out = {}
+    if "pi" in which:
+        out["estimate_pi"] = to_arena(bl.path_integration(batch).estimate)
+    if "sh" in which:
+        out["estimate_sh"] = to_arena(bl.single_hypothesis(batch).estimate)
+    if "nb" in which:
+        out["estimate_nb"] = to_arena(bl.naive_bayes(batch).estimate)
+    if "pf" in which:
+        res = bl.particle_filter(batch, n_particles=n_particles)
+        out["estimate_pf"] = to_arena(res.estimate)
+        out["pf_cov"] = res.cov
+    return out
+
+
+# ----------------------------------------------------------------------- recordings
+RECORDINGS = {
+    # name: (network, task, task-config overrides, baselines, n trials attr)
+    "localization": ("localization", "localization", {}, ("pi", "sh", "pf"), "trials"),
+    "generalized": ("generalized", "generalized", {}, ("pi", "sh", "nb", "pf"), "trials"),
+    "specialized": ("specialized", "specialized", {}, ("pi", "sh", "pf"), "trials"),
+    "specialized_many": ("specialized", "specialized", {}, (), "remap_trials"),
+    "specialized_maps": ("specialized", "specialized", {"n_arenas": 2}, (), "map_trials"),
+    "generalized_maps": ("generalized", "generalized", {"arenas": "fixed", "n_arenas": 2},
+                         (), "map_trials"),
+    "readout": ("generalized_readout", "specialized", {}, (), "trials"),
+}
+
+
+def recording(name: str, cfg: FigureConfig):
+    """A cached recording of the paper's data set ``name`` (see :data:`RECORDINGS`)."""
+    network, task, overrides, which, size_attr = RECORDINGS[name]
+    n_trials = getattr(cfg, size_attr)
+    net_path = network_file(network)
+    key = _digest(net_path.read_bytes(), name, n_trials, cfg.particles, cfg.seed,
+                  sorted(overrides.items()), which, hp.__version__)
+    path = cfg.cache / f"{name}.zarr"
+    if path.exists():
+        try:
+            rec = hp.open_recording(path)
+            if rec.attrs.get("paper_key") == key:
+                return rec
+        except ValueError:
+            pass            # unreadable or half-written: rebuild it
+    t0 = time.time()
+    net = hp.load_pretrained(net_path)
+    config = task_config(task, **overrides) if overrides else None
+    batch = make_trials(task, n_trials, "test", cfg.seed, config=config)
+    extra = baseline_estimates(batch, which, cfg.particles) if which else None
+    rec = hp.record(net, batch, baselines=extra, checkpoint=network,
+                    session_id=f"paper-{name}")
+    rec.attrs["paper_key"] = key
+    rec.attrs["paper_dataset"] = name
+    cfg.cache.mkdir(parents=True, exist_ok=True)
+    hp.save_recording(rec, path, overwrite=True)
+    print(f"  recorded {name}: {n_trials} trials in {time.time() - t0:.0f} s -> {path}")
+    return hp.open_recording(path)
+
+
+def cached_arrays(name: str, cfg: FigureConfig, make, *key_parts) -> dict:
+    """``make()`` -> dict of arrays, cached as ``<cache>/<name>.npz`` under a key."""
+    key = _digest(name, cfg, *key_parts, hp.__version__)
+    path = cfg.cache / f"{name}.npz"
+    if path.exists():
+        with np.load(path, allow_pickle=False) as f:
+            if str(f["_key"]) == key:
+                return {k: f[k] for k in f.files if k != "_key"}
+    out = make()
+    cfg.cache.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez(tmp, _key=key, **out)
+    tmp.replace(path)
+    return out
+
+
+# ----------------------------------------------------------------------- output
+COLORS = {"network": "k", "estimate": "k", "estimate_pf": "tab:blue",
+          "estimate_sh": "tab:orange", "estimate_pi": "tab:red", "estimate_nb": "tab:green",
+          "estimate_pfslam": "tab:purple"}
+LABELS = {"estimate": "network", "estimate_pf": "particle filter (oracle)",
+          "estimate_sh": "single hypothesis", "estimate_pi": "path integration",
+          "estimate_nb": "naive Bayes", "estimate_pfslam": "PF-SLAM"}
+
+
+def jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        return None if not np.isfinite(obj) else round(float(obj), 6)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    return obj
+
+
+def save(fig, name: str, numbers: dict, cfg: FigureConfig, out: Path) -> None:
+    """Write ``<out>/<name>.png``, ``.pdf`` and ``.json`` (the plotted numbers)."""
+    out.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out / f"{name}.png", dpi=130)
+    fig.savefig(out / f"{name}.pdf")
+    plt.close(fig)
+    payload = {"figure": name, "size": asdict(cfg), "hippo_probe": hp.__version__,
+               "networks": network_info(), **numbers}
+    (out / f"{name}.json").write_text(json.dumps(jsonable(payload), indent=1))
+    print(f"  wrote {out / name}.png/.pdf/.json")
+
+
+def network_info() -> dict:
+    """Training state of the shipped networks (steps done, finished or not)."""
+    from hippo_probe.pretrained import HERE
+    info = {}
+    for p in sorted(HERE.glob("*.log.json")):
+        log = json.loads(p.read_text())
+        info[p.name.removesuffix(".log.json")] = {
+            "steps_done": log.get("steps_done"), "steps_budget": log["config"]["steps"],
+            "finished": log.get("finished"), "wall_time_s": log.get("wall_time_s")}
+    return info
+
+
+def at_times(curve, dt, times=(50.0, 100.0, 200.0)) -> dict:
+    """Values of a per-step curve at given times in the trial (s)."""
+    curve = np.asarray(curve)
+    return {f"{int(t)}s": float(curve[int(round(t / dt)) - 1]) for t in times}
+
+
+def with_size(cfg: FigureConfig, **changes) -> FigureConfig:
+    return replace(cfg, **changes)

@@ -1,0 +1,171 @@
+"""Figure 4: the networks' units recorded like cells.
+
+A-B rate maps of example units measured twice in one arena (two disjoint sets of trials)
+and once in another — A specialized network (familiar arenas), B generalized network
+(novel arenas) — with place-field stability across all units; C head-direction tuning of
+20 units; D cumulative population-vector similarity within vs across environments, with
+the label-shuffled control; E distribution of spatial selectivity and, inset,
+selectivity vs projection strength onto the arena classifier.
+
+    python paper_figures/fig4.py [--size tiny|full|paper] [--out figures/]
+"""
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.gridspec import GridSpec
+
+import hippo_probe as hp
+
+try:
+    from . import _common as C
+except ImportError:
+    import _common as C
+
+N_EXAMPLES = 4
+BIN = 0.05          # m: 5 cm bins in the 0.33 m arenas
+SIGMA = 1.0         # bins
+
+
+def _three_maps(rec):
+    """Maps of every unit in arena A (first half of its trials), A (second half), B."""
+    env = rec.trial_environment.values
+    ids = rec.trial_id.values
+    arenas = np.unique(env)
+    a, b = arenas[0], arenas[1]
+    in_a = ids[env == a]
+    half = len(in_a) // 2
+    sets = [in_a[:half], in_a[half:], ids[env == b]]
+    ext = None
+    maps = [hp.ratemaps(hp.select_trials(rec, trials=s), bin_size=BIN, sigma=SIGMA,
+                        extent=ext) for s in sets]
+    return maps, (a, b)
+
+
+def _corr(m1, m2):
+    x, y = m1.values.reshape(len(m1.unit), -1), m2.values.reshape(len(m2.unit), -1)
+    out = np.full(len(x), np.nan)
+    for u in range(len(x)):
+        ok = np.isfinite(x[u]) & np.isfinite(y[u])
+        if ok.sum() > 3 and x[u, ok].std() > 0 and y[u, ok].std() > 0:
+            out[u] = np.corrcoef(x[u, ok], y[u, ok])[0, 1]
+    return out
+
+
+def _maps_panel(fig, cell, rec, title, numbers, key):
+    maps, (a, b) = _three_maps(rec)
+    same = _corr(maps[0], maps[1])
+    across = _corr(maps[0], maps[2])
+    sel = hp.spatial_selectivity(rec, bin_size=BIN).selectivity
+    sel = sel.max(dim=[d for d in sel.dims if d != "unit"]) if sel.ndim > 1 else sel
+    examples = np.argsort(-np.nan_to_num(sel.values))[:N_EXAMPLES]
+    gs = cell.subgridspec(N_EXAMPLES, 4, wspace=0.08, hspace=0.12)
+    verts = rec.arena_vertices
+    for row, u in enumerate(examples):
+        for col, (m, env) in enumerate(zip(maps, (a, a, b))):
+            ax = fig.add_subplot(gs[row, col])
+            img = m.isel(unit=u)
+            ax.pcolormesh(img.x, img.y, img, shading="nearest", cmap="viridis")
+            v = verts.sel(environment_id=env).values
+            ax.plot(*np.vstack([v, v[:1]]).T, color="w", lw=0.8)
+            ax.set_aspect("equal")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if row == 0:
+                ax.set_title(["arena A, trials 1", "arena A, trials 2", "arena B"][col],
+                             fontsize=7)
+            if col == 0:
+                ax.set_ylabel(f"unit {int(rec.unit[u])}", fontsize=7)
+    ax = fig.add_subplot(gs[:, 3])
+    bins = np.linspace(-1, 1, 21)
+    ax.hist(same[np.isfinite(same)], bins, alpha=0.7, color="k", label="A vs A")
+    ax.hist(across[np.isfinite(across)], bins, alpha=0.5, color="tab:red", label="A vs B")
+    ax.set_xlabel("rate-map correlation", fontsize=7)
+    ax.set_ylabel("units", fontsize=7)
+    ax.legend(frameon=False, fontsize=6)
+    ax.tick_params(labelsize=6)
+    ax.set_title(title, fontsize=8, loc="right")
+    numbers[key] = {"stability_same_arena_median": float(np.nanmedian(same)),
+                    "correlation_across_arenas_median": float(np.nanmedian(across)),
+                    "example_units": rec.unit.values[examples]}
+
+
+def make(cfg, out):
+    numbers = {}
+    spec_maps = C.recording("specialized_maps", cfg)
+    gen_maps = C.recording("generalized_maps", cfg)
+    many = C.recording("specialized_many", cfg)
+
+    fig = plt.figure(figsize=(14, 10), constrained_layout=True)
+    grid = GridSpec(3, 3, figure=fig, height_ratios=[1.2, 1, 1])
+    _maps_panel(fig, grid[0, :2].subgridspec(1, 1)[0], spec_maps,
+                "A specialized network", numbers, "A")
+    _maps_panel(fig, grid[1, :2].subgridspec(1, 1)[0], gen_maps,
+                "B generalized network, novel arenas", numbers, "B")
+
+    hd = hp.head_direction_tuning(many, n_bins=36)
+    mvl = hd.mean_vector_length.values.ravel()
+    show = np.argsort(-np.nan_to_num(mvl))[:20]
+    gs = grid[0, 2].subgridspec(4, 5)
+    theta = hd.direction.values
+    for k, u in enumerate(show):
+        ax = fig.add_subplot(gs[k // 5, k % 5], projection="polar")
+        r = hd.tuning_curve.isel(unit=u).values
+        r = r - np.nanmin(r)
+        ax.plot(np.append(theta, theta[0]), np.append(r, r[0]), lw=0.8)
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_title(f"{int(many.unit[u])}: R={mvl[u]:.2f}", fontsize=6)
+    numbers["C_mean_vector_length"] = {
+        "median_all_units": float(np.nanmedian(mvl)),
+        "max": float(np.nanmax(mvl)), "shown_units": many.unit.values[show],
+        "fraction_R_gt_0.3": float(np.mean(mvl > 0.3))}
+
+    ax = fig.add_subplot(grid[1, 2])
+    ax.hist(mvl, bins=30, color="gray")
+    ax.set_xlabel("mean vector length R (from the tuning curve)")
+    ax.set_ylabel("units")
+    ax.set_title("C head-direction tuning, all units", fontsize=9)
+
+    sim = hp.remapping_similarity(many)
+    ax = fig.add_subplot(grid[2, 0])
+    same = sim.same_environment.values
+    perm = sim.same_environment_permuted.values
+    s = sim.similarity.values
+    for values, label, style in ((s[same], "same arena", "-"), (s[~same], "different arenas", "-"),
+                                 (s[perm], "same (labels shuffled)", ":"),
+                                 (s[~perm], "different (labels shuffled)", ":")):
+        values = np.sort(values[np.isfinite(values)])
+        if len(values):
+            ax.plot(values, np.arange(1, len(values) + 1) / len(values), ls=style,
+                    label=label)
+    ax.set_xlabel("population-vector correlation between trials")
+    ax.set_ylabel("cumulative fraction of trial pairs")
+    ax.set_title("D remapping (specialized network)", fontsize=9)
+    ax.legend(frameon=False, fontsize=7)
+    numbers["D_similarity"] = {c: float(sim["mean"].sel(comparison=c))
+                               for c in sim.comparison.values}
+
+    ctx = hp.context_cells(many)
+    ax = fig.add_subplot(grid[2, 1:])
+    sel = ctx.spatial_selectivity.values
+    ax.hist(sel[np.isfinite(sel)], bins=30, color="tab:blue")
+    ax.set_xlabel("spatial selectivity (variance explained by position)")
+    ax.set_ylabel("units")
+    ax.set_title("E spatial selectivity (specialized network)", fontsize=9)
+    inset = ax.inset_axes([0.6, 0.45, 0.37, 0.5])
+    inset.scatter(ctx.projection_strength, sel, s=4, color="k")
+    inset.set_xlabel("projection strength onto classifier", fontsize=7)
+    inset.set_ylabel("selectivity", fontsize=7)
+    inset.tick_params(labelsize=6)
+    rho = ctx.attrs.get("rank_correlation")
+    inset.set_title(f"Spearman rho = {rho:.2f}", fontsize=7)
+    numbers["E"] = {"selectivity_median": float(np.nanmedian(sel)),
+                    "rank_correlation": rho,
+                    "rank_correlation_p": ctx.attrs.get("rank_correlation_p")}
+    fig.suptitle("Fig. 4 — hidden units recorded like cells")
+    C.save(fig, "fig4", numbers, cfg, out)
+    return numbers
+
+
+if __name__ == "__main__":
+    make(*C.parse_args(__doc__.splitlines()[0]))

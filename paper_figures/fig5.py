@@ -1,0 +1,81 @@
+"""Figure 5: what the population encodes beyond position.
+
+A the particle filter's posterior covariance (Cxx, Cyy, Cxy) decoded linearly from the
+localization network's hidden units (cross-validated by trial); B the specialized
+network's posterior over the 100 arenas at a few moments early in a trial; C the
+correlation dimension of each network's hidden-state trajectories.
+
+    python paper_figures/fig5.py [--size tiny|full|paper] [--out figures/]
+"""
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+import hippo_probe as hp
+
+try:
+    from . import _common as C
+except ImportError:
+    import _common as C
+
+SNAPSHOTS_S = (2.0, 10.0, 30.0, 80.0)
+
+
+def make(cfg, out):
+    numbers = {}
+    loc = C.recording("localization", cfg)
+    spec = C.recording("specialized", cfg)
+    gen = C.recording("generalized", cfg)
+    fig, ax = plt.subplots(2, 4, figsize=(15, 7), constrained_layout=True)
+
+    dec = hp.decode_covariance(loc)
+    for k, comp in enumerate(["xx", "yy", "xy"]):
+        a = ax[0, k]
+        truth = loc.pf_cov.sel(cov=comp).values
+        pred = dec.prediction.sel(component=comp).values
+        ok = np.isfinite(truth) & np.isfinite(pred)
+        step = max(ok.sum() // 4000, 1)
+        a.scatter(truth[ok][::step], pred[ok][::step], s=2, alpha=0.3, color="k")
+        lim = [np.nanmin(truth), np.nanmax(truth)]
+        a.plot(lim, lim, color="tab:red", lw=0.8)
+        r2 = float(dec.r2.sel(component=comp))
+        a.set_title(f"A  C{comp}: R² = {r2:.2f}", fontsize=9)
+        a.set_xlabel(f"particle filter C{comp} (m²)")
+        a.set_ylabel(f"decoded from units (m²)")
+        numbers.setdefault("A_r2", {})[comp] = r2
+
+    trial = spec.trial_id.values[0]
+    one = hp.select_trials(spec, trials=[trial])
+    true_env = int(one.trial_environment.values[0])
+    a = ax[0, 3]
+    for t in SNAPSHOTS_S:
+        k = int(round(t / spec.attrs["dt"])) - 1
+        p = one.class_probability.isel(time=k).values
+        a.plot(one.environment_id.values, p, lw=0.9, label=f"t = {t:g} s")
+        numbers.setdefault("B_true_class_probability", {})[f"{t:g}s"] = float(p[true_env])
+    a.axvline(true_env, color="k", ls=":", lw=0.8, label="true arena")
+    a.set_xlabel("arena id")
+    a.set_ylabel("network posterior")
+    a.set_title("B  arena posterior, one trial", fontsize=9)
+    a.legend(frameon=False, fontsize=7)
+
+    for k, (name, rec) in enumerate((("localization", loc), ("generalized", gen),
+                                     ("specialized", spec))):
+        res = hp.correlation_dimension(rec, max_points=cfg.dimension_samples)
+        a = ax[1, k]
+        a.plot(res.log_r, res.log_c, color="k")
+        lo, hi = np.log10(res.attrs["r_min"]), np.log10(res.attrs["r_max"])
+        a.axvspan(lo, hi, color="tab:blue", alpha=0.15, label="scaling range")
+        a.set_xlabel("log10 r")
+        a.set_ylabel("log10 C(r)")
+        a.set_title(f"C  {name}: D = {res.attrs['dimension']:.2f}", fontsize=9)
+        a.legend(frameon=False, fontsize=7)
+        numbers.setdefault("C_dimension", {})[name] = float(res.attrs["dimension"])
+    ax[1, 3].axis("off")
+    fig.suptitle("Fig. 5 — uncertainty, arena identity and dimensionality in the population")
+    C.save(fig, "fig5", numbers, cfg, out)
+    return numbers
+
+
+if __name__ == "__main__":
+    make(*C.parse_args(__doc__.splitlines()[0]))

@@ -23,6 +23,9 @@ import numpy as np
 
 #: Partial sums are combined this many at a time in the dask tree reduction.
 _SPLIT_EVERY = 8
+#: An in-memory recording is split across threads only in blocks of at least this many
+#: samples (below, starting threads costs more than it saves).
+_MIN_SAMPLES_PER_THREAD = 50_000
 
 
 @numba.njit(cache=True, nogil=True)
@@ -160,7 +163,24 @@ def _finish(part, n_bins):
     return BinSums(full_sums, full_counts, amin, full_sq)
 
 
-def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False):
+def _eager(activity, bins, shifts, want_sq, threads):
+    """In-memory samples: contiguous blocks reduced in parallel threads (the kernel
+    releases the GIL), then combined."""
+    n = len(activity)
+    threads = numba.get_num_threads() if threads is None else threads
+    threads = max(1, min(threads, n // _MIN_SAMPLES_PER_THREAD))
+    if threads == 1:
+        return _partial(activity, bins, 0, shifts, want_sq)
+    from concurrent.futures import ThreadPoolExecutor
+
+    edges = np.linspace(0, n, threads + 1).astype(int)
+    with ThreadPoolExecutor(threads) as pool:
+        parts = list(pool.map(lambda a, b: _partial(activity[a:b], bins, a, shifts, want_sq),
+                              edges[:-1], edges[1:]))
+    return _combine(parts)
+
+
+def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False, threads=None):
     """Per-bin sample counts and activity sums, in one pass over the samples.
 
     .. math:: S_{k,b,u} = \\sum_{t:\\, bins[t - s_k] = b} a_{t,u}, \\qquad
@@ -178,6 +198,9 @@ def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False):
         Circular shifts (in samples) of ``bins`` against ``activity``; 0 = no shift.
     want_sq : bool
         Also sum the squared activity per bin (unshifted).
+    threads : int, optional
+        Threads for an in-memory ``activity`` (default: ``numba.get_num_threads()``, which
+        follows ``NUMBA_NUM_THREADS``). A dask array uses the dask scheduler's workers.
 
     Returns
     -------
@@ -186,7 +209,7 @@ def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False):
     bins = np.ascontiguousarray(bins, dtype=np.int64)
     shifts = np.asarray(shifts, dtype=np.int64) % max(len(bins), 1)
     if not hasattr(activity, "dask"):
-        return _finish(_partial(np.asarray(activity), bins, 0, shifts, want_sq), n_bins)
+        return _finish(_eager(np.asarray(activity), bins, shifts, want_sq, threads), n_bins)
 
     import dask
 

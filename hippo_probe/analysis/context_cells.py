@@ -69,9 +69,18 @@ def context_cells(rec, weights=None, *, bin_size=None, min_speed=None):
 
     Examples
     --------
-    >>> res = context_cells(rec)                                   # doctest: +SKIP
-    >>> res.attrs["rank_correlation"]                              # doctest: +SKIP
-    -0.6
+    >>> import numpy as np
+    >>> from hippo_probe.recording import from_arrays
+    >>> t = np.arange(4000) * 0.1
+    >>> xy = 0.5 * np.c_[np.cos(t / 7), np.sin(t / 5)]
+    >>> act = np.c_[np.cos(4 * xy), np.random.default_rng(0).normal(size=(4000, 2))]
+    >>> rec = from_arrays(t, xy, activity=act, activity_kind="lstm_hidden")
+    >>> weights = np.array([[0.1, 0.0, 2.0, 1.0], [0.0, 0.2, -1.0, 3.0]])
+    >>> res = context_cells(rec, weights)
+    >>> res.projection_strength.values.round(2)
+    array([0.1 , 0.2 , 2.24, 3.16])
+    >>> round(res.attrs["rank_correlation"], 2)
+    -0.8
     """
     _common.check_recording(rec, ["activity", "position"], why="context cells")
     w = _weights(rec, weights)

@@ -120,12 +120,19 @@ def decode_covariance(rec, target="pf_cov", *, n_folds=None, alphas=None, seed=0
 
     Examples
     --------
-    >>> res = decode_covariance(rec)                         # doctest: +SKIP
-    >>> res.r2.to_series()                                   # doctest: +SKIP
-    cov
-    xx    0.83
-    yy    0.81
-    xy    0.42
+    >>> import numpy as np
+    >>> from hippo_probe.recording import from_arrays
+    >>> rng = np.random.default_rng(0)
+    >>> trial = np.arange(8000) // 1000
+    >>> t = (np.arange(8000) + trial) * 0.1
+    >>> act = rng.normal(size=(8000, 3))
+    >>> rec = from_arrays(t, np.zeros((8000, 2)), activity=act, trial=trial,
+    ...                   activity_kind="lstm_hidden")
+    >>> cov = np.c_[act @ [1.0, 2.0, 0.0], rng.normal(size=8000)]
+    >>> rec["pf_cov"] = (("time", "cov"), cov, {"units": "m2", "long_name": "covariance"})
+    >>> res = decode_covariance(rec.assign_coords(cov=["xx", "yy"]))
+    >>> res.r2.values.round(2)
+    array([ 1., -0.])
     """
     _common.check_recording(rec, ["activity", target, "trial"], why="decoding")
     tgt = rec[target]

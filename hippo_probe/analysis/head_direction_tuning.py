@@ -102,13 +102,13 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
 
     Examples
     --------
-    >>> import numpy as np, xarray as xr
+    >>> import numpy as np
+    >>> from hippo_probe.recording import from_arrays
     >>> t = np.arange(5000) * 0.1
-    >>> hd = np.mod(0.3 * t + np.pi, 2 * np.pi) - np.pi
+    >>> hd = 0.3 * t
     >>> rate = np.exp(4 * (np.cos(hd - 1.0) - 1))[:, None]
-    >>> rec = xr.Dataset(
-    ...     {"activity": (("time", "unit"), rate), "head_direction": ("time", hd)},
-    ...     coords={"time": t, "unit": [0]}, attrs={"dt": 0.1, "activity_kind": "rate"})
+    >>> rec = from_arrays(t, np.zeros((5000, 2)), activity=rate, head_direction=hd,
+    ...                   activity_kind="rate")
     >>> res = head_direction_tuning(rec, n_shuffles=0)
     >>> round(float(np.degrees(res.preferred_direction[0])))
     57

@@ -326,14 +326,13 @@ def ratemaps(rec, *, bin_size=None, sigma=None, min_occupancy=None, min_speed=No
 
     Examples
     --------
-    >>> import numpy as np, xarray as xr
+    >>> import numpy as np
+    >>> from hippo_probe.recording import from_arrays
     >>> t = np.arange(2000) * 0.1
-    >>> xy = np.c_[np.cos(t / 7), np.sin(t / 5)]
-    >>> rec = xr.Dataset(
-    ...     {"activity": (("time", "unit"), np.exp(-((xy - 0.5) ** 2).sum(1, keepdims=True))),
-    ...      "position": (("time", "space"), xy)},
-    ...     coords={"time": t, "unit": [0], "space": ["x", "y"]}, attrs={"dt": 0.1})
-    >>> maps = ratemaps(rec, bin_size=0.25, sigma=0)
+    >>> xy = 0.5 * np.c_[np.cos(t / 7), np.sin(t / 5)]
+    >>> field = np.exp(-((xy - 0.2) ** 2).sum(1, keepdims=True) / 0.02)
+    >>> rec = from_arrays(t, xy, activity=field, activity_kind="rate")
+    >>> maps = ratemaps(rec, bin_size=0.1, sigma=0)
     >>> maps.dims
     ('unit', 'y', 'x')
     """

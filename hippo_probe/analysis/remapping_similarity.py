@@ -90,10 +90,20 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
 
     Examples
     --------
-    >>> rec = two_environment_recording()                       # doctest: +SKIP
-    >>> sim = remapping_similarity(rec)                         # doctest: +SKIP
-    >>> sim["mean"].sel(comparison=["same", "different"]).values  # doctest: +SKIP
-    array([0.95, 0.01])
+    Eight trials alternate between two environments with unrelated maps:
+
+    >>> import numpy as np
+    >>> from hippo_probe.recording import from_arrays
+    >>> trial = np.arange(8000) // 1000
+    >>> t = (np.arange(8000) + trial) * 0.1
+    >>> xy = 0.5 * np.c_[np.cos(t / 7), np.sin(t / 5)]
+    >>> env = trial % 2
+    >>> act = np.where(env[:, None] == 0, np.cos(4 * xy), np.sin(4 * xy[:, ::-1]))
+    >>> rec = from_arrays(t, xy, activity=act, trial=trial, environment=env,
+    ...                   activity_kind="rate")
+    >>> sim = remapping_similarity(rec)
+    >>> sim["mean"].sel(comparison=["same", "different"]).values.round(1)
+    array([1. , 0.1])
     """
     _common.check_recording(rec, ["activity", "position", "trial", "environment"],
                             why="remapping similarity")

@@ -92,14 +92,12 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
 
     Examples
     --------
-    >>> import numpy as np, xarray as xr
+    >>> import numpy as np
+    >>> from hippo_probe.recording import from_arrays
     >>> t = np.arange(4000) * 0.1
     >>> xy = np.c_[np.cos(t / 7), np.sin(t / 5)]
     >>> rate = np.c_[(xy[:, 0] > 0.5).astype(float), np.ones(len(t))]
-    >>> rec = xr.Dataset(
-    ...     {"activity": (("time", "unit"), rate), "position": (("time", "space"), xy)},
-    ...     coords={"time": t, "unit": [0, 1], "space": ["x", "y"]},
-    ...     attrs={"dt": 0.1, "activity_kind": "rate"})
+    >>> rec = from_arrays(t, xy, activity=rate, activity_kind="rate")
     >>> info = spatial_information(rec, bin_size=0.25)
     >>> bool(info.information[0] > 1.0), float(info.information[1])
     (True, 0.0)

@@ -67,13 +67,12 @@ def spatial_selectivity(rec, *, bin_size=None, min_speed=None, by=None, extent=N
 
     Examples
     --------
-    >>> import numpy as np, xarray as xr
+    >>> import numpy as np
+    >>> from hippo_probe.recording import from_arrays
     >>> t = np.arange(4000) * 0.1
     >>> xy = np.c_[np.cos(t / 7), np.sin(t / 5)]
     >>> act = np.c_[3 * xy[:, 0] - 1, np.random.default_rng(0).normal(size=len(t))]
-    >>> rec = xr.Dataset(
-    ...     {"activity": (("time", "unit"), act), "position": (("time", "space"), xy)},
-    ...     coords={"time": t, "unit": [0, 1], "space": ["x", "y"]}, attrs={"dt": 0.1})
+    >>> rec = from_arrays(t, xy, activity=act, activity_kind="lstm_hidden")
     >>> sel = spatial_selectivity(rec, bin_size=0.1)
     >>> bool(sel.selectivity[0] > 0.99), bool(sel.selectivity[1] < 0.2)
     (True, True)

@@ -209,3 +209,19 @@ def test_extent_from_data_without_arena():
     assert ext[1] == pytest.approx(pos[:, 0].max() * 0.5)
     assert maps.occupancy.sum() == pytest.approx(300.0)  # every sample counted
     assert isinstance(maps, xr.DataArray) and max(maps.sizes["x"], maps.sizes["y"]) == 32
+
+
+def test_threaded_bin_sums_equal_single_thread():
+    from hippo_probe.analysis._binning import bin_sums
+
+    rng = np.random.default_rng(19)
+    act = rng.normal(size=(120_000, 7)).astype(np.float32)
+    bins = rng.integers(-1, 50, len(act))
+    one = bin_sums(act, bins, 50, shifts=(0, 999), want_sq=True, threads=1)
+    two = bin_sums(act, bins, 50, shifts=(0, 999), want_sq=True, threads=2)
+    np.testing.assert_allclose(two.sums, one.sums, rtol=1e-12)
+    np.testing.assert_array_equal(two.counts, one.counts)
+    np.testing.assert_array_equal(two.amin, one.amin)
+    np.testing.assert_allclose(two.sumsq, one.sumsq, rtol=1e-12)
+    ref = np.array([act[bins == b].astype(float).sum(axis=0) for b in range(50)])
+    np.testing.assert_allclose(one.sums[0], ref, rtol=1e-10)

@@ -236,19 +236,65 @@ def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False, threads=None):
     )
 
 
-def compact(flat, n_total):
-    """Renumber the bins that occur in ``flat`` as 0..m-1, in order.
-
-    Returns ``(compact_bins, occupied)`` where ``occupied`` lists the original index of
-    each compact bin. Keeps accumulators as small as the visited (group, bin) pairs even
-    when the full grid (e.g. trials x bins) is large.
-    """
-    valid = flat >= 0
-    seen = np.zeros(n_total, bool)
-    seen[flat[valid]] = True
-    occupied = np.flatnonzero(seen)
+@numba.njit(cache=True)
+def _compact(bins, groups, n_bins, n_total):
+    seen = np.zeros(n_total, np.bool_)
+    for t in range(bins.shape[0]):
+        if bins[t] >= 0:
+            seen[groups[t] * n_bins + bins[t]] = True
     index = np.full(n_total, -1, np.int64)
-    index[occupied] = np.arange(occupied.size)
-    out = np.full(flat.shape, -1, np.int64)
-    out[valid] = index[flat[valid]]
-    return out, occupied
+    occupied = np.empty(n_total, np.int64)
+    k = 0
+    for j in range(n_total):
+        if seen[j]:
+            index[j] = k
+            occupied[k] = j
+            k += 1
+    out = np.full(bins.shape[0], -1, np.int64)
+    for t in range(bins.shape[0]):
+        if bins[t] >= 0:
+            out[t] = index[groups[t] * n_bins + bins[t]]
+    return out, occupied[:k]
+
+
+def compact(bins, groups, n_bins, n_groups):
+    """Number the visited (group, bin) pairs 0..m-1, in order of ``group * n_bins + bin``.
+
+    Returns ``(compact_bins, occupied)``: the compact bin of every sample (-1 where
+    ``bins`` is -1) and the flat index ``group * n_bins + bin`` of each compact bin. Keeps
+    accumulators as small as the visited pairs even when the full grid (e.g. trials x
+    bins) is large.
+    """
+    bins = np.ascontiguousarray(bins, dtype=np.int64)
+    groups = np.ascontiguousarray(groups, dtype=np.int64)
+    return _compact(bins, groups, n_bins, n_groups * n_bins)
+
+
+@numba.njit(cache=True)
+def grid_bins(x, y, x0, y0, size, nx, ny):
+    """Flat bin ``iy * nx + ix`` of each point of a square grid; -1 outside or NaN.
+
+    A point on the far edge of the grid belongs to the last bin. Returns
+    ``(bins, n_nan, n_outside)``.
+    """
+    n = x.shape[0]
+    bins = np.full(n, -1, np.int64)
+    n_nan = 0
+    n_out = 0
+    x1, y1 = x0 + nx * size, y0 + ny * size
+    for t in range(n):
+        xt, yt = x[t], y[t]
+        if not (np.isfinite(xt) and np.isfinite(yt)):
+            n_nan += 1
+            continue
+        ix = int(np.floor((xt - x0) / size))
+        iy = int(np.floor((yt - y0) / size))
+        if ix == nx and xt <= x1:
+            ix = nx - 1
+        if iy == ny and yt <= y1:
+            iy = ny - 1
+        if ix < 0 or ix >= nx or iy < 0 or iy >= ny:
+            n_out += 1
+            continue
+        bins[t] = iy * nx + ix
+    return bins, n_nan, n_out

@@ -11,7 +11,7 @@ from scipy import ndimage
 
 from .._validators import check_number, check_shape
 from . import _common
-from ._binning import BinSums, bin_sums, compact
+from ._binning import BinSums, bin_sums, compact, grid_bins
 from ._common import AnalysisWarning
 from .config import RATEMAP
 
@@ -114,29 +114,18 @@ def position_bins(rec, grid: Grid, *, min_speed=None, xy=None):
     reason (position NaN, outside the extent, too slow).
     """
     x, y = _positions(rec) if xy is None else xy
-    finite = np.isfinite(x) & np.isfinite(y)
-    if not finite.any():
+    bins, n_nan, n_out = grid_bins(x, y, grid.extent[0], grid.extent[2], grid.bin_size,
+                                   grid.nx, grid.ny)
+    if n_nan == len(x):
         raise ValueError("`rec.position` has no finite sample: cannot compute a spatial "
                          "map (all positions are NaN)")
-    x0, x1, y0, y1 = grid.extent
-    with np.errstate(invalid="ignore"):
-        ix = np.floor((x - x0) / grid.bin_size)
-        iy = np.floor((y - y0) / grid.bin_size)
-        # a sample exactly on the far edge belongs to the last bin
-        ix[x == x1] = grid.nx - 1
-        iy[y == y1] = grid.ny - 1
-        inside = finite & (ix >= 0) & (ix < grid.nx) & (iy >= 0) & (iy < grid.ny)
-    keep = inside.copy()
-    dropped = {"position_nan": int((~finite).sum()),
-               "outside_extent": int((finite & ~inside).sum())}
+    dropped = {"position_nan": int(n_nan), "outside_extent": int(n_out)}
     if min_speed is not None:
         check_number("min_speed", min_speed, low=0, low_inclusive=True)
         with np.errstate(invalid="ignore"):
-            fast = _common.speed(rec) >= min_speed
-        dropped["below_min_speed"] = int((keep & ~fast).sum())
-        keep &= fast
-    bins = np.full(len(x), -1, np.int64)
-    bins[keep] = (iy[keep] * grid.nx + ix[keep]).astype(np.int64)
+            slow = ~(_common.speed(rec) >= min_speed)
+        dropped["below_min_speed"] = int((slow & (bins >= 0)).sum())
+        bins[slow] = -1
     return bins, dropped
 
 
@@ -171,8 +160,7 @@ def tuning_sums(rec, bins, groups, n_groups, n_bins, shifts=(0,), want_sq=False)
     None. Only the visited (group, bin) pairs are accumulated, then scattered onto the
     grid, so accumulators stay small even for many groups.
     """
-    flat = np.where(bins >= 0, groups * n_bins + bins, -1)
-    small, occupied = compact(flat, n_groups * n_bins)
+    small, occupied = compact(bins, groups, n_bins, n_groups)
     res = bin_sums(_common.activity(rec).data, small, len(occupied), shifts, want_sq)
     n_shifts, _, n_units = res.sums.shape
 

@@ -130,20 +130,19 @@ def _partial(block, bins, t0, shifts, want_sq):
 
 def _combine(parts):
     """Add partials that may cover different compact-bin ranges."""
+    amin = np.minimum.reduce([p[3] for p in parts])  # blocks with no valid sample count too
+    want_sq = any(p[4].shape[0] for p in parts)
     parts = [p for p in parts if p[1].shape[1] > 0] or parts[:1]
     lo = min(p[0] for p in parts)
     hi = max(p[0] + p[1].shape[1] for p in parts)
     k, _, n_units = parts[0][1].shape
     sums = np.zeros((k, hi - lo, n_units))
     counts = np.zeros((k, hi - lo), np.int64)
-    amin = np.full(n_units, np.inf)
-    want_sq = any(p[4].shape[0] for p in parts)
     sumsq = np.zeros((hi - lo if want_sq else 0, n_units))
-    for p_lo, p_sums, p_counts, p_amin, p_sumsq in parts:
+    for p_lo, p_sums, p_counts, _, p_sumsq in parts:
         sl = slice(p_lo - lo, p_lo - lo + p_sums.shape[1])
         sums[:, sl] += p_sums
         counts[:, sl] += p_counts
-        np.minimum(amin, p_amin, out=amin)
         if p_sumsq.shape[0]:
             sumsq[sl] += p_sumsq
     return lo, sums, counts, amin, sumsq

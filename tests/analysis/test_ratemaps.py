@@ -225,3 +225,17 @@ def test_threaded_bin_sums_equal_single_thread():
     np.testing.assert_allclose(two.sumsq, one.sumsq, rtol=1e-12)
     ref = np.array([act[bins == b].astype(float).sum(axis=0) for b in range(50)])
     np.testing.assert_allclose(one.sums[0], ref, rtol=1e-10)
+
+
+def test_minimum_counts_samples_outside_every_bin():
+    from hippo_probe.analysis._binning import bin_sums
+
+    act = np.arange(200_000, dtype=np.float32)[:, None] + 5
+    act[150_000] = -3  # the minimum sits in a stretch where no sample is binned
+    bins = np.zeros(len(act), np.int64)
+    bins[100_000:] = -1
+    for threads in (1, 2):
+        assert bin_sums(act, bins, 1, threads=threads).amin[0] == -3
+    import dask.array as da
+
+    assert bin_sums(da.from_array(act, chunks=(20_000, 1)), bins, 1).amin[0] == -3

@@ -425,6 +425,18 @@ _CACHED_FIELDS = ("inputs", "position", "head_direction", "contact", "start",
                   "environment", "arena_vertices", "trial_index")
 
 
+def _write_block(zarr, batch, tmp, path) -> None:
+    """Write a block's arrays to ``tmp``, then rename it to ``path`` (atomic)."""
+    group = zarr.open_group(str(tmp), mode="w")
+    for name in _CACHED_FIELDS:
+        value = getattr(batch, name)
+        group.create_array(name, data=value, chunks=value.shape)
+    try:
+        os.rename(tmp, path)
+    except OSError:  # another process won the race; its block is identical
+        pass
+
+
 def default_cache_dir() -> Path:
     """``$HIPPO_PROBE_CACHE`` or ``~/.cache/hippo_probe/trials``."""
     return Path(os.environ.get("HIPPO_PROBE_CACHE",
@@ -449,6 +461,7 @@ def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0,
     n_trials = check_nonnegative_int("n_trials", n_trials)
     first = check_nonnegative_int("first", first)
     config = config or task_config(task)
+    seed = check_nonnegative_int("seed", seed)
     root = Path(cache_dir or default_cache_dir()) / f"{task}-{split}-seed{seed}-{config.fingerprint()}"
     root.mkdir(parents=True, exist_ok=True)
     blocks = []
@@ -459,15 +472,10 @@ def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0,
             batch = make_trials(task, CACHE_CHUNK, split, seed, first=block * CACHE_CHUNK,
                                 config=config)
             tmp = Path(tempfile.mkdtemp(dir=root, prefix=".tmp-"))
-            group = zarr.open_group(str(tmp / "g"), mode="w")
-            for name in _CACHED_FIELDS:
-                value = getattr(batch, name)
-                group.create_array(name, data=value, chunks=value.shape)
             try:
-                os.rename(tmp / "g", path)
-            except OSError:  # another process won the race; its block is identical
-                pass
-            shutil.rmtree(tmp, ignore_errors=True)
+                _write_block(zarr, batch, tmp / "g", path)
+            finally:
+                shutil.rmtree(tmp, ignore_errors=True)
         group = zarr.open_group(str(path), mode="r")
         lo = max(first, block * CACHE_CHUNK) - block * CACHE_CHUNK
         hi = min(stop, (block + 1) * CACHE_CHUNK) - block * CACHE_CHUNK

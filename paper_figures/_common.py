@@ -53,7 +53,7 @@ class FigureConfig:
 
 CONFIGS = {
     "full": FigureConfig(),
-    "tiny": FigureConfig(name="tiny", trials=4, particles=50, slam_particles=(20, 50),
+    "tiny": FigureConfig(name="tiny", trials=4, particles=50, slam_particles=(100, 200),
                          slam_trials=2, map_trials=6, remap_trials=12,
                          dimension_samples=300),
     "paper": FigureConfig(name="paper", trials=1000, slam_trials=100, map_trials=100,
@@ -214,10 +214,16 @@ def network_info() -> dict:
     return info
 
 
-def at_times(curve, dt, times=(50.0, 100.0, 200.0)) -> dict:
-    """Values of a per-step curve at given times in the trial (s)."""
-    curve = np.asarray(curve)
-    return {f"{int(t)}s": float(curve[int(round(t / dt)) - 1]) for t in times}
+def at_times(time, curve, times=(50.0, 100.0, 200.0)) -> dict:
+    """Values of a curve (over ``time``, s) at the samples nearest given times (s)."""
+    time, curve = np.asarray(time), np.asarray(curve)
+    return {f"{int(t)}s": float(curve[np.argmin(np.abs(time - t))]) for t in times}
+
+
+def step_times(rec) -> np.ndarray:
+    """Times in trial (s) of the network steps, ``dt, 2 dt, ..., T dt``."""
+    n = int(round(float(rec.trial_time.max()) / rec.attrs["dt"]))
+    return rec.attrs["dt"] * np.arange(1, n + 1)
 
 
 def with_size(cfg: FigureConfig, **changes) -> FigureConfig:

@@ -41,10 +41,9 @@ def make(cfg, out):
     axes[0].legend(frameon=False, fontsize=8)
     fig.suptitle("Fig. 2 — localization in a familiar 1 m arena (start unknown), "
                  f"{numbers['n_trials']} test trials, mean ± s.e.m.")
-    dt = rec.attrs["dt"]
     numbers["summary"] = {
-        C.LABELS[n]: C.at_times(err.euclidean.sel(estimate=n).values, dt) for n in ESTIMATES}
-    late = slice(int(100 / dt), None)
+        C.LABELS[n]: C.at_times(t, err.euclidean.sel(estimate=n).values) for n in ESTIMATES}
+    late = t > 100
     numbers["summary"]["network / PF error, t > 100 s"] = float(
         err.euclidean.sel(estimate="estimate").values[late].mean()
         / err.euclidean.sel(estimate="estimate_pf").values[late].mean())

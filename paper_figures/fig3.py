@@ -55,7 +55,6 @@ def make(cfg, out):
     gen = C.recording("generalized", cfg)
     spec = C.recording("specialized", cfg)
     readout = C.recording("readout", cfg)
-    dt = gen.attrs["dt"]
     fig, ax = plt.subplots(2, 3, figsize=(13, 7.5), constrained_layout=True)
     ax = ax.ravel()
 
@@ -63,7 +62,7 @@ def make(cfg, out):
     err_g = hp.localization_error(gen, estimate=names)
     _curves(ax[0], err_g, names, numbers, "A_generalized_error")
     ax[0].set_title("A  generalized network, novel arenas")
-    late = slice(int(100 / dt), None)
+    late = err_g.trial_time.values > 100
     numbers["A_ratio_network_to_pf_t_gt_100s"] = float(
         err_g.euclidean.sel(estimate="estimate")[late].mean()
         / err_g.euclidean.sel(estimate="estimate_pf")[late].mean())
@@ -79,23 +78,24 @@ def make(cfg, out):
     ax[2].axhline(acc.attrs.get("chance", 0.01), color="gray", ls=":", label="chance")
     ax[2].set_title("C  arena classification (specialized network)")
     numbers["C_accuracy"] = acc.accuracy.values
-    numbers["C_accuracy_at"] = C.at_times(acc.accuracy.values, dt)
+    numbers["C_accuracy_at"] = C.at_times(t, acc.accuracy.values)
 
     slam = _slam(cfg)
     sub = hp.select_trials(spec, trials=spec.trial_id.values[:cfg.slam_trials])
     net_err = hp.localization_error(sub).euclidean.values
     net_acc = hp.classification_accuracy(sub).accuracy.values
+    ts = C.step_times(spec)
     ax[3].plot(t, net_err, color="k", lw=1.6, label="network")
     cmap = plt.get_cmap("Purples")
     for k, n in enumerate(cfg.slam_particles):
         c = cmap(0.4 + 0.6 * k / max(len(cfg.slam_particles) - 1, 1))
-        ax[3].plot(t, slam[f"error_{n}"], color=c, label=f"PF-SLAM {n:,} particles")
-        ax[4].plot(t, slam[f"accuracy_{n}"], color=c, label=f"PF-SLAM {n:,} particles")
-        numbers[f"D_pfslam_{n}_error_at"] = C.at_times(slam[f"error_{n}"], dt)
-        numbers[f"E_pfslam_{n}_accuracy_at"] = C.at_times(slam[f"accuracy_{n}"], dt)
+        ax[3].plot(ts, slam[f"error_{n}"], color=c, label=f"PF-SLAM {n:,} particles")
+        ax[4].plot(ts, slam[f"accuracy_{n}"], color=c, label=f"PF-SLAM {n:,} particles")
+        numbers[f"D_pfslam_{n}_error_at"] = C.at_times(ts, slam[f"error_{n}"])
+        numbers[f"E_pfslam_{n}_accuracy_at"] = C.at_times(ts, slam[f"accuracy_{n}"])
     ax[4].plot(t, net_acc, color="k", lw=1.6, label="network")
-    numbers["D_network_error_at"] = C.at_times(net_err, dt)
-    numbers["E_network_accuracy_at"] = C.at_times(net_acc, dt)
+    numbers["D_network_error_at"] = C.at_times(t, net_err)
+    numbers["E_network_accuracy_at"] = C.at_times(t, net_acc)
     ax[3].set_ylabel("Euclidean error (m)")
     ax[3].set_title(f"D  PF-SLAM vs network ({cfg.slam_trials} trials)")
     ax[4].set_title(f"E  PF-SLAM vs network ({cfg.slam_trials} trials)")
@@ -104,7 +104,7 @@ def make(cfg, out):
     ax[5].plot(t, acc_r.accuracy, color="tab:green", label="generalized net, new readout")
     ax[5].plot(t, acc.accuracy, color="k", alpha=0.5, label="specialized net")
     ax[5].set_title("F  readout retraining")
-    numbers["F_readout_accuracy_at"] = C.at_times(acc_r.accuracy.values, dt)
+    numbers["F_readout_accuracy_at"] = C.at_times(t, acc_r.accuracy.values)
     for a in (ax[2], ax[4], ax[5]):
         a.set_ylabel("classification accuracy")
         a.set_ylim(0, 1.02)

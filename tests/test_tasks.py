@@ -250,9 +250,6 @@ def test_a_block_written_by_a_concurrent_process_is_kept(tmp_path, small_blocks,
     assert sorted(p.relative_to(store) for p in store.rglob("*")) == before   # no leftovers
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "reported to the lead: an exception while writing a block leaves its .tmp-* "
-    "directory behind in the cache (never read, but half-written data on disk)"))
 def test_an_interrupted_block_write_leaves_nothing_on_disk(tmp_path, small_blocks,
                                                            monkeypatch):
     def failing_rename(src, dst):
@@ -286,9 +283,6 @@ def test_bad_input_raises_naming_parameter_and_value(call, name, value, tmp_path
     assert list(tmp_path.iterdir()) == []          # nothing written
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "reported to the lead: cached_trials does not check `seed` before creating the "
-    "store's directory, so a bad seed leaves an empty directory behind"))
 def test_cached_trials_bad_seed_writes_nothing(tmp_path):
     with pytest.raises(ValueError, match=r"`seed`.*-1"):
         cached_trials("generalized", 4, seed=-1, cache_dir=tmp_path)

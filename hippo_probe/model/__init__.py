@@ -1,15 +1,18 @@
-"""The network: peephole LSTM, Navigator, and ``record`` (network -> recording)."""
+"""The network: peephole LSTM, Navigator, and ``record`` (network -> recording).
 
-from .config import ModelConfig, input_scale_for
-from .lstm import PeepholeLSTM, reference_peephole_lstm
-from .navigator import Navigator
+Attributes are imported lazily so that ``hippo-probe --help`` (which reads this package's
+``_cli``) does not load torch.
+"""
 
-__all__ = ["ModelConfig", "Navigator", "PeepholeLSTM", "input_scale_for",
-           "reference_peephole_lstm", "record"]
+import importlib
+
+_ATTRS = {"ModelConfig": ".config", "input_scale_for": ".config",
+          "PeepholeLSTM": ".lstm", "reference_peephole_lstm": ".lstm",
+          "Navigator": ".navigator", "record": ".record"}
+__all__ = sorted(_ATTRS)
 
 
 def __getattr__(name):
-    if name == "record":
-        from .record import record
-        return record
-    raise AttributeError(name)
+    if name not in _ATTRS:
+        raise AttributeError(f"module 'hippo_probe.model' has no attribute {name!r}")
+    return getattr(importlib.import_module(_ATTRS[name], __name__), name)

@@ -1,8 +1,18 @@
-"""Training of Navigator networks: fit loop, checkpoints, resume, DDP, readout retraining."""
+"""Training of Navigator networks: fit loop, checkpoints, resume, DDP, readout retraining.
 
-from .config import TrainConfig
-from .fit import (build_network, class_weight_rule, evaluate_network, fit, save_network,
-                  summarize)
+Attributes are imported lazily so that ``hippo-probe --help`` (which reads this package's
+``_cli``) does not load torch.
+"""
 
-__all__ = ["TrainConfig", "build_network", "class_weight_rule", "evaluate_network", "fit",
-           "save_network", "summarize"]
+import importlib
+
+_ATTRS = {"TrainConfig": ".config", "build_network": ".fit", "class_weight_rule": ".fit",
+          "evaluate_network": ".fit", "fit": ".fit", "save_network": ".fit",
+          "summarize": ".fit", "export_network": ".export"}
+__all__ = sorted(_ATTRS)
+
+
+def __getattr__(name):
+    if name not in _ATTRS:
+        raise AttributeError(f"module 'hippo_probe.training' has no attribute {name!r}")
+    return getattr(importlib.import_module(_ATTRS[name], __name__), name)

@@ -16,7 +16,9 @@ N_NOISE_DRAWS = 6
 
 def wrap_angle(a):
     """Wrap angles to [-pi, pi)."""
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+    r = (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+    # one ulp below -pi, the modulo rounds up to 2 pi and gives +pi: fold it back
+    return np.where(r >= np.pi, r - 2 * np.pi, r)
 
 
 def sense(motion: dict, noise: NoiseModel, noise_draws: np.ndarray,

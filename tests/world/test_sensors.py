@@ -145,8 +145,5 @@ def test_negative_noise_raises_naming_parameter_and_value(name):
         NoiseModel(**{name: -0.1})
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "reported to the lead: (a + pi) % 2pi rounds up to 2pi for a one ulp below -pi, so "
-    "wrap_angle returns +pi, outside [-pi, pi) (harmless in practice, but the contract)"))
 def test_wrap_angle_just_below_minus_pi():
     assert wrap_angle(np.nextafter(-np.pi, -4.0)) < np.pi

@@ -18,12 +18,13 @@ Then the lazy case: 10,000,000 samples (the same kind of data) saved with
 ratemaps + information are timed in a fresh process whose peak resident memory is
 reported (target < 2 GB).
 
-    python benchmarks/bench_ratemaps.py [--samples 1000000] [--units 256] [--threads 1]
+    python benchmarks/bench_ratemaps.py [--samples 1000000] [--units 256] [--threads 2]
         [--lazy-samples 10000000] [--store /tmp/bench_10M.zarr] [--skip-peers] [--skip-lazy]
 
 Timings are best of ``--repeat`` for hippo_probe and the floor (after a warm-up that
-compiles the numba kernel), one run for the peers (they take seconds to minutes). Note
-the machine load printed at the top: the machine is shared.
+compiles the numba kernel), one run for the peers (they take seconds to minutes).
+hippo_probe is timed on 1 thread (as the peers run) and on ``--threads``. Note the
+machine load printed at the top and bottom: the machine is shared.
 """
 
 from __future__ import annotations
@@ -36,9 +37,9 @@ import time
 
 
 def _pin_threads(n):
-    for var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                "MKL_NUM_THREADS"):
-        os.environ[var] = str(n)
+    os.environ["NUMBA_NUM_THREADS"] = str(n)
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = "1"  # numpy/scipy single-threaded, like the peers
 
 
 def walk(n, rng, dt=0.02, speed=0.2, half=0.5):
@@ -155,10 +156,18 @@ def in_memory(args):
         maps = hp.ratemaps(rec, bin_size=args.bin_size, sigma=0, extent=(-0.5, 0.5, -0.5, 0.5))
         return maps, hp.spatial_information(maps)
 
+    import numba
+
     hp.ratemaps(rec.isel(time=slice(0, 20000)), bin_size=args.bin_size, sigma=0)  # compile
     rows = []
+    numba.set_num_threads(1)
     t_ours, (maps, info) = best_of(ours, args.repeat)
-    rows.append(("hippo_probe", t_ours))
+    rows.append(("hippo_probe (1 thread)", t_ours))
+    if args.threads > 1:
+        numba.set_num_threads(args.threads)
+        t_par, _ = best_of(ours, args.repeat)
+        rows.append((f"hippo_probe ({args.threads} threads)", t_par))
+        numba.set_num_threads(1)
     t_floor, (f_maps, f_info) = best_of(lambda: floor(pos, act, edges, dt), args.repeat)
     rows.append(("numpy/scipy floor (sparse product)", t_floor))
     assert np.allclose(maps.values, f_maps, rtol=1e-5, equal_nan=True), "floor maps differ"
@@ -187,9 +196,9 @@ def in_memory(args):
               f"information difference {rel:.2e} (pynapple's rate = spikes / duration); "
               f"opexebo's information is {100 * clip:+.1f}% (median) — it clips bins "
               "below the mean rate")
-    print(f"\n{'contender':<62}{'seconds':>10}{'x hippo_probe':>16}")
+    print(f"\n{'contender':<62}{'seconds':>10}{'/ hippo_probe 1 thread':>24}")
     for name, sec in rows:
-        print(f"{name:<62}{sec:>10.3f}{sec / t_ours:>16.1f}")
+        print(f"{name:<62}{sec:>10.3f}{sec / t_ours:>24.2f}")
     return t_ours
 
 
@@ -224,9 +233,15 @@ def build_store(args):
     print(f"wrote {args.store} in {time.perf_counter() - t0:.0f} s")
 
 
-def lazy_child(args):
-    import resource
+def _peak_rss_gib():
+    """Peak resident memory of this process (VmHWM). Not getrusage's ru_maxrss: on Linux a
+    child started by fork+exec inherits its parent's maximum there."""
+    with open("/proc/self/status") as f:
+        kib = next(int(line.split()[1]) for line in f if line.startswith("VmHWM:"))
+    return kib / 2**20
 
+
+def lazy_child(args):
     import dask
 
     import hippo_probe as hp
@@ -237,7 +252,7 @@ def lazy_child(args):
     maps = hp.ratemaps(rec, bin_size=args.bin_size, sigma=0, extent=(-0.5, 0.5, -0.5, 0.5))
     info = hp.spatial_information(maps)
     sec = time.perf_counter() - t0
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # KiB -> GiB
+    peak = _peak_rss_gib()
     print(f"lazy: {rec.sizes['time']:,} samples x {rec.sizes['unit']} units in "
           f"{rec.activity.data.npartitions} dask chunks: {sec:.1f} s, peak RSS {peak:.2f} GiB "
           f"(information of unit 0: {float(info.information[0]):.3f} bits/spike)")
@@ -248,7 +263,9 @@ def main(argv=None):
     p.add_argument("--samples", type=int, default=1_000_000)
     p.add_argument("--units", type=int, default=256)
     p.add_argument("--bin-size", type=float, default=0.025)
-    p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--threads", type=int, default=2,
+                   help="threads for hippo_probe's second timing and the lazy run "
+                        "(peers and the floor run single-threaded)")
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--lazy-samples", type=int, default=10_000_000)
     p.add_argument("--store", default="/tmp/hippo_probe_bench_10M.zarr")
@@ -263,7 +280,7 @@ def main(argv=None):
     if args.build_store:
         return build_store(args)
     print("load:", os.popen("uptime").read().strip())
-    print(f"threads pinned to {args.threads}")
+    print(f"numba threads: 1 and {args.threads}; BLAS threads: 1")
     in_memory(args)
     if not args.skip_lazy:
         base = [sys.executable, __file__, "--units", str(args.units), "--bin-size",

@@ -21,11 +21,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-#: Partial sums are combined this many at a time in the dask tree reduction.
-_SPLIT_EVERY = 8
-#: An in-memory recording is split across threads only in blocks of at least this many
-#: samples (below, starting threads costs more than it saves).
-_MIN_SAMPLES_PER_THREAD = 50_000
+from .config import COMPUTE
+
 
 
 @numba.njit(cache=True, nogil=True)
@@ -167,7 +164,7 @@ def _eager(activity, bins, shifts, want_sq, threads):
     releases the GIL), then combined."""
     n = len(activity)
     threads = numba.get_num_threads() if threads is None else threads
-    threads = max(1, min(threads, n // _MIN_SAMPLES_PER_THREAD))
+    threads = max(1, min(threads, n // COMPUTE.min_samples_per_thread))
     if threads == 1:
         return _partial(activity, bins, 0, shifts, want_sq)
     from concurrent.futures import ThreadPoolExecutor
@@ -223,8 +220,8 @@ def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False, threads=None):
         parts = [partial(blocks[i, j], bins_d, int(starts[i]), shifts_d, want_sq)
                  for i in range(blocks.shape[0])]
         while len(parts) > 1:
-            parts = [combine(parts[i:i + _SPLIT_EVERY])
-                     for i in range(0, len(parts), _SPLIT_EVERY)]
+            parts = [combine(parts[i:i + COMPUTE.split_every])
+                     for i in range(0, len(parts), COMPUTE.split_every)]
         columns.append(parts[0])
     results = [_finish(r, n_bins) for r in dask.compute(*columns)]
     return BinSums(

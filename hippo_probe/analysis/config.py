@@ -192,8 +192,12 @@ class CorrelationDimensionConfig:
     transient : float
         The first 10% of each trial is dropped, so the initial convergence of the network
         state is not counted as part of the attractor.
-    n_radii : int
-        C(r) is evaluated at 60 log-spaced radii between the smallest and largest distance.
+    per_decade : int
+        The pair-count histogram has 50 log-spaced radii per decade: the scaling range is
+        then resolved to 2% of a decade.
+    decades : int
+        It spans 7 decades below the largest possible distance (twice the largest distance
+        from the centroid), far below any scaling range a few thousand points can show.
     c_range : tuple of float
         The scaling range is searched where 1e-4 <= C(r) <= 0.1: below, too few pairs;
         above, the finite size of the set bends the curve.
@@ -201,20 +205,42 @@ class CorrelationDimensionConfig:
         The fit uses the window of at least 0.5 decade of r in that range whose local slopes
         vary least.
     block : int
-        Rows per block of the pairwise-distance computation.
+        Rows per block of the pairwise-distance computation (512 x 4,000 distances, 16 MB).
+    seed : int
+        Seed of the subsampling.
     """
 
     max_points: int = 4000
     theiler: int = 10
     transient: float = 0.1
-    n_radii: int = 60
+    per_decade: int = 50
+    decades: int = 7
     c_range: tuple = (1e-4, 0.1)
     min_decades: float = 0.5
     block: int = 512
     seed: int = 0
 
 
+@dataclass(frozen=True)
+class ComputeConfig:
+    """How the per-bin sums are computed.
+
+    Attributes
+    ----------
+    split_every : int
+        Partial sums of dask chunks are added 8 at a time (a tree reduction): few enough
+        partials alive at once to bound memory, enough to keep the tree shallow.
+    min_samples_per_thread : int
+        An in-memory recording is split across numba threads only in blocks of at least
+        50,000 samples; below that, starting a thread costs more than it saves.
+    """
+
+    split_every: int = 8
+    min_samples_per_thread: int = 50_000
+
+
 CONVENTIONS = RecordingConventions()
+COMPUTE = ComputeConfig()
 RATEMAP = RateMapConfig()
 SHUFFLE = ShuffleConfig()
 INFORMATION = InformationConfig()

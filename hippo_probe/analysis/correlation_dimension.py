@@ -9,11 +9,6 @@ from .._validators import check_number
 from . import _common
 from .config import CORRELATION_DIMENSION as CFG
 
-#: Log-spaced radii per decade of the pair-count histogram (fine enough that the scaling
-#: range is resolved to a few percent of a decade).
-_PER_DECADE = 50
-#: Decades of radius below the largest distance that the histogram covers.
-_DECADES = 7
 
 
 def _points(data, *, max_points, transient, seed):
@@ -183,7 +178,8 @@ def correlation_dimension(rec_or_array, *, max_points=None, theiler=None, transi
                          f"the transient; got {len(points)}")
     spread = np.sqrt(((points - points.mean(axis=0)) ** 2).sum(axis=1)).max()
     r_top = 2 * spread * (1 + 1e-9)  # no distance exceeds twice the largest radius
-    edges = np.logspace(np.log10(r_top) - _DECADES, np.log10(r_top), _DECADES * _PER_DECADE + 1)
+    edges = np.logspace(np.log10(r_top) - CFG.decades, np.log10(r_top),
+                        CFG.decades * CFG.per_decade + 1)
     counts, n_pairs = pair_counts(points, order, trial, theiler, edges)
     if n_pairs == 0 or spread == 0:
         raise ValueError("no pair of distinct samples outside the Theiler window: the "

@@ -8,7 +8,7 @@ import xarray as xr
 
 from .._validators import check_number
 from . import _common
-from .config import DECODING
+from .config import COMPUTE, DECODING
 
 
 def _fold_stats(x, y, fold, n_folds):
@@ -50,7 +50,8 @@ def _stats(act, y, fold, n_folds):
     parts = [stat(b, y[s:e], fold[s:e], n_folds)
              for b, s, e in zip(blocks, starts[:-1], starts[1:])]
     while len(parts) > 1:
-        parts = [dask.delayed(_add)(parts[i:i + 8]) for i in range(0, len(parts), 8)]
+        step = COMPUTE.split_every
+        parts = [dask.delayed(_add)(parts[i:i + step]) for i in range(0, len(parts), step)]
     return dask.compute(parts[0])[0]
 
 

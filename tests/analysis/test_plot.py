@@ -10,7 +10,11 @@ from matplotlib.figure import Figure  # noqa: E402
 import hippo_probe as hp  # noqa: E402
 from hippo_probe import plot  # noqa: E402
 
-from .conftest import hd_cell_recording, place_cell_recording, two_environment_recording  # noqa: E402,E501
+from .conftest import (  # noqa: E402
+    hd_cell_recording,
+    place_cell_recording,
+    two_environment_recording,
+)
 
 
 @pytest.fixture(autouse=True)

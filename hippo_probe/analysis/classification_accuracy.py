@@ -82,5 +82,6 @@ def classification_accuracy(rec, probability="class_probability"):
         "units": "1", "long_name": "probability of the true environment"})
     out["n_trials"] = ("trial_time", count[:, 0], {"units": "1", "long_name": "trials averaged"})
     out.attrs = _common.provenance("classification_accuracy", rec, probability=probability,
-                                   chance=1.0 / len(ids))
+                                   chance=1.0 / len(ids),
+                                   sem="NaN where fewer than 2 trials contribute")
     return out

@@ -11,16 +11,15 @@ from . import _common
 
 def trial_time_average(values, rec):
     """Mean, s.e.m. and count over trials of per-sample ``values`` (time, k) at each
-    time in trial (samples are matched by ``round(trial_time / dt)``); NaN skipped.
+    time in trial that occurs (samples are matched by ``round(trial_time / dt)``); NaN
+    values are skipped.
 
     Returns ``(trial_time, mean, sem, count)``.
     """
     dt = _common.sample_dt(rec)
     step = np.rint(_common.values(rec["trial_time"]) / dt).astype(np.int64)
-    if step.min() < 0:
-        raise ValueError("`rec.trial_time` must be >= 0; got "
-                         f"{_common.values(rec['trial_time']).min()}")
-    n_steps = int(step.max()) + 1
+    steps, index = np.unique(step, return_inverse=True)
+    n_steps = len(steps)
     values = np.asarray(values, float).reshape(len(step), -1)
     ok = np.isfinite(values)
     v = np.where(ok, values, 0.0)
@@ -28,14 +27,14 @@ def trial_time_average(values, rec):
     total = np.zeros_like(count)
     total2 = np.zeros_like(count)
     for j in range(values.shape[1]):
-        count[:, j] = np.bincount(step, weights=ok[:, j], minlength=n_steps)
-        total[:, j] = np.bincount(step, weights=v[:, j], minlength=n_steps)
-        total2[:, j] = np.bincount(step, weights=v[:, j] ** 2, minlength=n_steps)
+        count[:, j] = np.bincount(index, weights=ok[:, j], minlength=n_steps)
+        total[:, j] = np.bincount(index, weights=v[:, j], minlength=n_steps)
+        total2[:, j] = np.bincount(index, weights=v[:, j] ** 2, minlength=n_steps)
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = total / count
         var = (total2 - count * mean**2) / (count - 1)
         sem = np.sqrt(np.maximum(var, 0.0) / count)
-    return np.arange(n_steps) * dt, mean, sem, count
+    return steps * dt, mean, sem, count
 
 
 def position_errors(estimate, position, centre=(0.0, 0.0)):
@@ -141,5 +140,6 @@ def localization_error(rec, estimate="estimate", *, centre=(0.0, 0.0)):
                                                   "long_name": f"s.e.m. of {long.lower()}"})
     out["n_trials"] = (dims, pick(2, 0), {"units": "1", "long_name": "trials averaged"})
     out.attrs = _common.provenance("localization_error", rec, estimate=names,
-                                   centre=list(centre))
+                                   centre=list(centre),
+                                   sem="NaN where fewer than 2 trials contribute")
     return out

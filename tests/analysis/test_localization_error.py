@@ -87,3 +87,19 @@ def test_classification_accuracy_vs_time():
     assert acc.attrs["chance"] == pytest.approx(1 / 3)
     with pytest.raises(ValueError, match="all NaN"):
         hp.classification_accuracy(rec.assign(class_probability=rec.class_probability * np.nan))
+
+
+def test_curves_cover_only_times_that_occur():
+    from hippo_probe.recording.layout import trial_layout
+    from hippo_probe.recording.schema import annotate
+
+    rec = trial_layout(50, 3, DT)  # samples at the end of each step: trial_time = dt, 2 dt ..
+    pos = np.zeros((150, 2)) + 0.1
+    rec["position"] = (("time", "space"), pos)
+    rec["estimate"] = (("time", "space"), pos + 0.03)
+    rec["activity"] = (("time", "unit"), np.zeros((150, 1), np.float32))
+    rec = annotate(rec.assign_coords(unit=[0]))
+    err = hp.localization_error(rec)
+    assert err.trial_time.values[0] == pytest.approx(DT)
+    assert err.sizes["trial_time"] == 50
+    assert np.isfinite(err.euclidean).all() and np.isfinite(err.euclidean_sem).all()

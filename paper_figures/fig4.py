@@ -12,7 +12,6 @@ selectivity vs projection strength onto the arena classifier.
 
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.gridspec import GridSpec
 
 import hippo_probe as hp
 
@@ -35,7 +34,8 @@ def _three_maps(rec):
     in_a = ids[env == a]
     half = len(in_a) // 2
     sets = [in_a[:half], in_a[half:], ids[env == b]]
-    ext = None
+    v = rec.arena_vertices.values.reshape(-1, 2)
+    ext = (v[:, 0].min(), v[:, 0].max(), v[:, 1].min(), v[:, 1].max())   # one grid for all
     maps = [hp.ratemaps(hp.select_trials(rec, trials=s), bin_size=BIN, sigma=SIGMA,
                         extent=ext) for s in sets]
     return maps, (a, b)
@@ -51,14 +51,16 @@ def _corr(m1, m2):
     return out
 
 
-def _maps_panel(fig, cell, rec, title, numbers, key):
+def _maps_panel(sub, rec, title, numbers, key):
     maps, (a, b) = _three_maps(rec)
     same = _corr(maps[0], maps[1])
     across = _corr(maps[0], maps[2])
     sel = hp.spatial_selectivity(rec, bin_size=BIN).selectivity
     sel = sel.max(dim=[d for d in sel.dims if d != "unit"]) if sel.ndim > 1 else sel
     examples = np.argsort(-np.nan_to_num(sel.values))[:N_EXAMPLES]
-    gs = cell.subgridspec(N_EXAMPLES, 4, wspace=0.08, hspace=0.12)
+    gs = sub.add_gridspec(N_EXAMPLES, 4, width_ratios=[1, 1, 1, 2.2], wspace=0.05,
+                          hspace=0.1)
+    fig = sub
     verts = rec.arena_vertices
     for row, u in enumerate(examples):
         for col, (m, env) in enumerate(zip(maps, (a, a, b))):
@@ -83,7 +85,8 @@ def _maps_panel(fig, cell, rec, title, numbers, key):
     ax.set_ylabel("units", fontsize=7)
     ax.legend(frameon=False, fontsize=6)
     ax.tick_params(labelsize=6)
-    ax.set_title(title, fontsize=8, loc="right")
+    ax.set_title("stability across all units", fontsize=8)
+    sub.suptitle(title, fontsize=10, x=0.02, ha="left")
     numbers[key] = {"stability_same_arena_median": float(np.nanmedian(same)),
                     "correlation_across_arenas_median": float(np.nanmedian(across)),
                     "example_units": rec.unit.values[examples]}
@@ -95,20 +98,22 @@ def make(cfg, out):
     gen_maps = C.recording("generalized_maps", cfg)
     many = C.recording("specialized_many", cfg)
 
-    fig = plt.figure(figsize=(14, 10), constrained_layout=True)
-    grid = GridSpec(3, 3, figure=fig, height_ratios=[1.2, 1, 1])
-    _maps_panel(fig, grid[0, :2].subgridspec(1, 1)[0], spec_maps,
-                "A specialized network", numbers, "A")
-    _maps_panel(fig, grid[1, :2].subgridspec(1, 1)[0], gen_maps,
-                "B generalized network, novel arenas", numbers, "B")
+    fig = plt.figure(figsize=(15, 13), layout="constrained")
+    rows = fig.subfigures(3, 1, height_ratios=[1, 1, 0.85])
+    top = rows[0].subfigures(1, 2, width_ratios=[1.6, 1])
+    mid = rows[1].subfigures(1, 2, width_ratios=[1.6, 1])
+    bottom = rows[2].subfigures(1, 2, width_ratios=[1, 1.6])
+    _maps_panel(top[0], spec_maps, "A  specialized network: rate maps of example units",
+                numbers, "A")
+    _maps_panel(mid[0], gen_maps, "B  generalized network in novel arenas", numbers, "B")
 
     hd = hp.head_direction_tuning(many, n_bins=36)
     mvl = hd.mean_vector_length.values.ravel()
     show = np.argsort(-np.nan_to_num(mvl))[:20]
-    gs = grid[0, 2].subgridspec(4, 5)
     theta = hd.direction.values
+    top[1].suptitle("C  head-direction tuning of the 20 most tuned units", fontsize=10)
     for k, u in enumerate(show):
-        ax = fig.add_subplot(gs[k // 5, k % 5], projection="polar")
+        ax = top[1].add_subplot(4, 5, k + 1, projection="polar")
         r = hd.tuning_curve.isel(unit=u).values
         r = r - np.nanmin(r)
         ax.plot(np.append(theta, theta[0]), np.append(r, r[0]), lw=0.8)
@@ -120,14 +125,14 @@ def make(cfg, out):
         "max": float(np.nanmax(mvl)), "shown_units": many.unit.values[show],
         "fraction_R_gt_0.3": float(np.mean(mvl > 0.3))}
 
-    ax = fig.add_subplot(grid[1, 2])
+    ax = mid[1].add_subplot(1, 1, 1)
     ax.hist(mvl, bins=30, color="gray")
     ax.set_xlabel("mean vector length R (from the tuning curve)")
     ax.set_ylabel("units")
     ax.set_title("C head-direction tuning, all units", fontsize=9)
 
     sim = hp.remapping_similarity(many)
-    ax = fig.add_subplot(grid[2, 0])
+    ax = bottom[0].add_subplot(1, 1, 1)
     same = sim.same_environment.values
     perm = sim.same_environment_permuted.values
     s = sim.similarity.values
@@ -146,7 +151,7 @@ def make(cfg, out):
                                for c in sim.comparison.values}
 
     ctx = hp.context_cells(many)
-    ax = fig.add_subplot(grid[2, 1:])
+    ax = bottom[1].add_subplot(1, 1, 1)
     sel = ctx.spatial_selectivity.values
     ax.hist(sel[np.isfinite(sel)], bins=30, color="tab:blue")
     ax.set_xlabel("spatial selectivity (variance explained by position)")

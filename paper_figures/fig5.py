@@ -28,17 +28,17 @@ def make(cfg, out):
     gen = C.recording("generalized", cfg)
     fig, ax = plt.subplots(2, 4, figsize=(15, 7), constrained_layout=True)
 
-    dec = hp.decode_covariance(loc)
+    dec = hp.decode_covariance(loc, n_folds=min(5, loc.sizes["trial_id"]))
     for k, comp in enumerate(["xx", "yy", "xy"]):
         a = ax[0, k]
         truth = loc.pf_cov.sel(cov=comp).values
-        pred = dec.prediction.sel(component=comp).values
+        pred = dec.prediction.sel(cov=comp).values
         ok = np.isfinite(truth) & np.isfinite(pred)
         step = max(ok.sum() // 4000, 1)
         a.scatter(truth[ok][::step], pred[ok][::step], s=2, alpha=0.3, color="k")
         lim = [np.nanmin(truth), np.nanmax(truth)]
         a.plot(lim, lim, color="tab:red", lw=0.8)
-        r2 = float(dec.r2.sel(component=comp))
+        r2 = float(dec.r2.sel(cov=comp))
         a.set_title(f"A  C{comp}: R² = {r2:.2f}", fontsize=9)
         a.set_xlabel(f"particle filter C{comp} (m²)")
         a.set_ylabel(f"decoded from units (m²)")

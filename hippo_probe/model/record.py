@@ -126,6 +126,9 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
                              f"got {values.shape}")
         data[name] = (BASELINE_VARIABLES[name], stack_trials(values))
     rec = rec.assign(data)
+    if "pf_cov" in rec:
+        from ..recording.schema import COV
+        rec = rec.assign_coords(cov=("cov", np.array(COV, dtype=object)))
     rec["position_readout_weight"].attrs.update(
         units="m", long_name="weight of the (x, y) position readout")
     rec["vertex"] = ("vertex", np.arange(verts.shape[1]),

@@ -17,43 +17,45 @@ from .._validators import check_number, check_positive
 
 @dataclass(frozen=True)
 class ContactModelConfig:
-    """How the baselines read a boundary contact.
+    """How the baselines read a boundary contact (model: :mod:`~hippo_probe.baselines.contact`).
 
-    A contact step reports a wall's inward normal only through the heading: the touched
-    wall's normal angle is ``hd + beta - pi`` (the end-of-step heading is the reflected
-    one), and the end-of-step position lies ``d + u a`` from that wall with ``u`` in
-    [0, 1] the unknown fraction of the step left after the contact (see
-    :mod:`hippo_probe.baselines.contact`).
+    The numbers below were checked against the world itself: 23,200 contacts of 300
+    generalized-task trials, with the touched wall and the noise-free contact known.
 
     Attributes
     ----------
     distance_slop_sd : float
-        0.005 m, added in quadrature to the sensor's distance noise: the spread of the
-        end-of-step distance around the uniform-retreat model (speed changes and turning
-        within the step, walls touched near their ends). Measured on 23,000 noise-free
-        contacts of the generalized task: 90% of retreats lie inside the modelled span,
-        and the 10% beyond it exceed it by a few mm.
+        0.003 m, added in quadrature to the sensor's distance noise: speed and heading
+        changes within a step bend the path away from the straight "V" of the model.
+    path_length_error : float
+        0.2: relative error of the step's path length taken from the sensed displacements
+        (each has an 18% speed error; a reflection shortens the chord). With these two
+        values the deciles of the distance likelihood's probability integral transform
+        lie within 0.084-0.105 apart from the lowest (0.125) (chi-square 239 on 9 d.o.f.
+        for 23,200 contacts; 0.1 gives 1,519, 0.3 gives 1,286).
     outlier_probability : float
         0.01: probability that a contact is not explained by one reflection off one wall
-        (double contacts in corners, large turns after the reflection). Measured: about
-        1% of noise-free contacts retreat more than 2.7 times the modelled span. Such a
+        (double contacts in corners, large turns after the reflection). Measured: 1.1% of
+        contacts lie beyond the 1e-5 quantile of the distance likelihood. Such a
         contact keeps a likelihood floor instead of killing every particle.
     angle_cutoff : float
         6 standard deviations: walls whose normal disagrees more with the sensed angle get
-        zero angle likelihood, so the particle kernels skip them (exp(-18) ~ 1e-8 of the
-        peak; the outlier floor dominates long before).
+        zero angle likelihood, so the particle kernels skip them (exp(-18) ~ 1.5e-8 of the
+        peak, far below the outlier floor).
     single_hypothesis_gate : float
         2 standard deviations: the single-hypothesis baseline resets onto walls whose
         normal agrees this well with the sensed angle (95% of true walls).
     """
 
-    distance_slop_sd: float = 0.005
+    distance_slop_sd: float = 0.003
+    path_length_error: float = 0.2
     outlier_probability: float = 0.01
     angle_cutoff: float = 6.0
     single_hypothesis_gate: float = 2.0
 
     def __post_init__(self):
         check_number("distance_slop_sd", self.distance_slop_sd, low=0, low_inclusive=True)
+        check_number("path_length_error", self.path_length_error, low=0, low_inclusive=True)
         check_number("outlier_probability", self.outlier_probability, low=0,
                      low_inclusive=True, high=1, high_inclusive=False)
         check_positive("angle_cutoff", self.angle_cutoff)
@@ -76,22 +78,25 @@ class ParticleFilterConfig:
         0.5: systematic resampling when the effective sample size
         ``1 / sum(w_i^2)`` falls below half the particle count, the usual rule (Doucet &
         Johansen 2009, "A tutorial on particle filtering and smoothing", sec. 3.5).
-    min_gain : float
-        0.05: lower clip of the sampled speed gain ``1 + e_s`` when the proposal divides
-        the sensed displacement by it (``1 + e_s < 0.05`` has probability ~1e-7 at
-        ``speed_sd = 0.18``); keeps a particle from jumping across the arena.
+    intermediate_checks : int
+        1: besides the step's end, the absence of contact is also checked at its midpoint
+        (on the chord from start to end, heading turned back by half the sensed turn).
+        Checking all 7 interior fine steps, as the simulator does, doubled the filter's
+        cost (152 vs 82 ns per particle-step) and changed neither its error (35.5 vs
+        35.4 mm) nor its calibration measurably (generalized task, 8-150 trials).
     """
 
     n_particles: int = 1000
     slam_particles: int = 10_000
     resample_threshold: float = 0.5
-    min_gain: float = 0.05
+    intermediate_checks: int = 1
 
     def __post_init__(self):
         check_positive("n_particles", self.n_particles, integer=True)
         check_positive("slam_particles", self.slam_particles, integer=True)
         check_number("resample_threshold", self.resample_threshold, low=0, high=1)
-        check_number("min_gain", self.min_gain, low=0, high=1, high_inclusive=False)
+        check_number("intermediate_checks", self.intermediate_checks, low=0,
+                     low_inclusive=True, integer=True)
 
 
 @dataclass(frozen=True)

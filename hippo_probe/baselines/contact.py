@@ -8,34 +8,52 @@ motion of :mod:`hippo_probe.world.motion`.
 
 Contact (``c = 1``). The simulator reflects the heading off the touched wall, so the
 *end-of-step* heading makes the angle :math:`\pi - \beta` with the wall's inward normal
-:math:`\phi_k`; a wall ``k`` therefore predicts :math:`\hat\beta_k = \phi_k + \pi - h`
-and the angle likelihood is a wrapped normal
+:math:`\phi_k`: wall ``k`` predicts :math:`\beta_k = \phi_k + \pi - h` up to the heading
+noise and the turning after the reflection (:func:`post_contact_turn_variance`), and the
+angle likelihood is a wrapped normal
 
-.. math:: p(\beta \mid k) = \mathcal N\big(\mathrm{wrap}(\beta - \hat\beta_k);\,0,\,
-          \sigma_\beta^2 + \sigma_h^2 + \sigma_{turn}^2\big),
+.. math:: p(\beta \mid k) = \mathcal N\big(\mathrm{wrap}(\beta - \beta_k);\,0,\,
+          v_\beta + v_k\big),\qquad v_\beta = \sigma_\beta^2,\quad
+          v_k = \sigma_h^2 + \sigma_{turn}^2 .
 
-where :math:`\sigma_{turn}^2` is the variance of the turning after the reflection
-(:func:`post_contact_turn_variance`). The contact happened at one of the ``S`` fine steps
-of the network step, the position is reported at its end: after the contact the agent
-retreats from the wall by :math:`u\,a` with :math:`u \sim U[0, 1]` (the fraction of the
-step left) and :math:`a = \frac{S-1}{S}\,\ell\,|\cos\beta|`, :math:`\ell` the step's path
-length (estimated as the larger sensed displacement of this and the previous step). The
-end-of-step distance :math:`\delta_k` of a particle to wall ``k`` then has the likelihood
+The contact happened at one of the ``S`` fine steps of the network step, at the sensed
+distance; the particle is known at both ends of the step. Between them the agent ran a
+"V": towards the wall, reflected at the contact, away from it, each fine step changing
+its distance to the wall by :math:`\Delta = \ell|\cos\beta|/S` (``l`` the step's path
+length). The distances :math:`\delta^s_k, \delta^e_k` of a particle's start and end to
+wall ``k`` therefore fix the distance at the contact,
 
-.. math:: p(d \mid \delta_k) = \frac{1}{a}\Big[\Phi\Big(\frac{\delta_k - d}{\sigma}\Big)
-          - \Phi\Big(\frac{\delta_k - d - a}{\sigma}\Big)\Big],\qquad
-          \sigma^2 = \sigma_d^2 + \sigma_{slop}^2,
+.. math:: d_k = \min\Big(\tfrac12\big(\delta^s_k + \delta^e_k - \hat\ell\,
+          |\cos\hat\beta_k|\big),\ \delta^s_k,\ \delta^e_k\Big),
 
-a uniform retreat blurred by the sensor noise (a normal density when ``a -> 0``). Summed
-over walls and mixed with a small outlier floor (a contact the one-reflection model does
-not explain), this is the likelihood of a contact step.
+(the apex of the V, and never farther than the path's ends), with :math:`\hat\ell` the
+larger sensed displacement of this and the previous step (a reflection shortens the
+chord) and :math:`\hat\beta_k` the precision-weighted mean of :math:`\beta` and
+:math:`\beta_k` (variance :math:`v_\beta v_k / (v_\beta + v_k)`). The distance likelihood
+is normal,
+
+.. math:: p(d \mid \delta^s_k, \delta^e_k) = \mathcal N(d;\, d_k,\, \sigma_k^2),\qquad
+          \sigma_k^2 = \sigma_d^2 + \sigma_{slop}^2 + \tfrac14\hat\ell^2\big(
+          \epsilon^2\cos^2\hat\beta_k + \tfrac{v_\beta v_k}{v_\beta + v_k}
+          \sin^2\hat\beta_k\big),
+
+the last term propagating the relative error :math:`\epsilon` of :math:`\hat\ell` and the
+error of :math:`\hat\beta_k`. Summed over walls (weighted by the angle likelihood) and
+mixed with a small outlier floor (a contact the one-reflection model does not explain),
+this is the likelihood of a contact step. Checked on 23,200 contacts of the generalized
+task with the true touched wall and the true start and end positions: the angle residuals
+are N(0, 1.02^2) (KS p = 0.8); the deciles of the distance likelihood's probability
+integral transform lie within 0.084-0.105 except the lowest (0.125, the ~1% of
+outliers); the uniform-retreat model that ignores the start spreads the same contacts
+over ~4 cm and left the filter under-confident.
 
 No contact (``c = 0``). The simulator checks every fine step, the last one at exactly the
 reported end position with exactly the reported (noise-free) heading: a particle that
 ends within ``touch_range`` of its nearest wall while heading towards it would have
 touched. Its no-contact likelihood is ``1 - P(heading towards that wall)``, with the
-heading known to :math:`\sigma_h`. Earlier fine steps are not checked (their positions
-are not tracked).
+heading known to :math:`\sigma_h`. The particle filter applies the same test at points
+inside the step, on the straight chord from its start to its end, with the heading
+turned back by the sensed turn (``ParticleFilterConfig.intermediate_checks``).
 
 References
 ----------
@@ -106,12 +124,17 @@ class ContactModel:
 
     Attributes
     ----------
-    angle_sd : float
-        ``sqrt(contact_angle_sd^2 + head_direction_sd^2 + post_contact_turn_variance)``.
-    distance_sd : float
-        ``sqrt(contact_distance_sd^2 + distance_slop_sd^2)``.
-    span_factor : float
-        ``(S - 1) / S``: the largest fraction of a step left after a contact.
+    angle_obs_var : float
+        ``contact_angle_sd^2``: noise of the sensed contact angle.
+    angle_wall_var : float
+        ``head_direction_sd^2 + post_contact_turn_variance``: error of a wall's predicted
+        angle ``phi_k + pi - h``.
+    distance_var : float
+        ``contact_distance_sd^2 + distance_slop_sd^2``.
+    path_length_error : float
+        ``epsilon`` of the module docstring.
+    substeps : int
+        ``S``, fine steps per network step.
     heading_sd : float
         Noise of the sensed heading (the no-contact test).
     touch_range, min_clearance : float
@@ -121,12 +144,14 @@ class ContactModel:
         Density of an unexplained contact: uniform distance in ``[0, touch_range]`` and
         angle over the half circle of approaching headings, ``1 / (pi touch_range)``.
     angle_cutoff : float
-        In units of ``angle_sd``.
+        In units of the angle likelihood's s.d.
     """
 
-    angle_sd: float
-    distance_sd: float
-    span_factor: float
+    angle_obs_var: float
+    angle_wall_var: float
+    distance_var: float
+    path_length_error: float
+    substeps: int
     heading_sd: float
     touch_range: float
     min_clearance: float
@@ -134,15 +159,20 @@ class ContactModel:
     outlier_density: float
     angle_cutoff: float
 
+    @property
+    def angle_sd(self) -> float:
+        """S.d. of the angle likelihood, ``sqrt(v_beta + v_k)``."""
+        return math.sqrt(self.angle_obs_var + self.angle_wall_var)
+
     @classmethod
     def from_config(cls, world: WorldConfig, contact: ContactModelConfig) -> "ContactModel":
         noise, motion, sensors = world.noise, world.motion, world.sensors
-        angle_var = (noise.contact_angle_sd ** 2 + noise.head_direction_sd ** 2
-                     + post_contact_turn_variance(motion))
         return cls(
-            angle_sd=math.sqrt(angle_var),
-            distance_sd=math.hypot(noise.contact_distance_sd, contact.distance_slop_sd),
-            span_factor=(motion.substeps - 1) / motion.substeps,
+            angle_obs_var=noise.contact_angle_sd ** 2,
+            angle_wall_var=noise.head_direction_sd ** 2 + post_contact_turn_variance(motion),
+            distance_var=noise.contact_distance_sd ** 2 + contact.distance_slop_sd ** 2,
+            path_length_error=contact.path_length_error,
+            substeps=motion.substeps,
             heading_sd=noise.head_direction_sd,
             touch_range=sensors.touch_range,
             min_clearance=sensors.min_clearance,
@@ -150,6 +180,11 @@ class ContactModel:
             outlier_density=1.0 / (math.pi * sensors.touch_range),
             angle_cutoff=contact.angle_cutoff,
         )
+
+    def kernel_args(self) -> tuple:
+        """The scalars :func:`contact_terms` takes, in its order."""
+        return (self.angle_obs_var, self.angle_wall_var, self.distance_var,
+                self.path_length_error, self.angle_cutoff)
 
 
 @dataclass(frozen=True)
@@ -160,6 +195,7 @@ class Observations:
     ----------
     displacement : (B, T, 2) sensed displacement of each step (m).
     heading : (B, T) sensed end-of-step heading (rad).
+    turn : (B, T) sensed change of heading over the step (rad).
     contact : (B, T) bool.
     distance : (B, T) sensed contact distance (m), 0 without contact.
     angle : (B, T) sensed contact angle beta (rad), 0 without contact.
@@ -169,6 +205,7 @@ class Observations:
 
     displacement: np.ndarray
     heading: np.ndarray
+    turn: np.ndarray
     contact: np.ndarray
     distance: np.ndarray
     angle: np.ndarray
@@ -186,6 +223,7 @@ class Observations:
         return cls(
             displacement=disp,
             heading=np.arctan2(col("sin_hd"), col("cos_hd")),
+            turn=col("dhd"),
             contact=np.ascontiguousarray(contact),
             distance=np.where(contact, col("contact_distance"), 0.0),
             angle=np.where(contact, np.arctan2(col("sin_beta"), col("cos_beta")), 0.0),
@@ -194,14 +232,21 @@ class Observations:
 
 
 def wall_angle_error(normal_angle, heading, angle):
-    """``wrap(beta - (phi_k + pi - h))``: sensed minus predicted contact angle per wall."""
+    """``wrap(beta - beta_k)``, ``beta_k = phi_k + pi - h``: sensed minus predicted contact
+    angle per wall."""
     return wrap_angle(np.asarray(angle) - (np.asarray(normal_angle) + np.pi
                                             - np.asarray(heading)))
 
 
-def retreat_span(model: ContactModel, path_length, angle):
-    """Largest end-of-step retreat ``a = (S-1)/S * l * |cos beta|`` after a contact (m)."""
-    return model.span_factor * np.asarray(path_length) * np.abs(np.cos(angle))
+def mean_retreat(model: ContactModel, normal_angle, heading, angle, path_length):
+    """Expected end-of-step distance beyond the contact distance, per wall (m):
+    ``(S - 1) / 2 * Delta_k``, the mean of ``(S - j) Delta_k`` over a contact at fine step
+    ``j`` uniform in ``1 ... S``."""
+    error = wall_angle_error(normal_angle, heading, angle)
+    share = model.angle_wall_var / (model.angle_obs_var + model.angle_wall_var)
+    beta = np.asarray(angle) - share * error
+    step = np.asarray(path_length) * np.abs(np.cos(beta)) / model.substeps
+    return 0.5 * (model.substeps - 1) * step
 
 
 # ----------------------------------------------------------------- numba building blocks
@@ -227,26 +272,28 @@ def _normal_mass(lo, hi):
     return 0.5 * (math.erfc(-hi / _SQRT2) - math.erfc(-lo / _SQRT2))
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def retreat_likelihood(delta, distance, span, sd):
-    """``p(d | delta)`` of the module docstring: uniform retreat ``[0, span]`` blurred by
-    a normal of s.d. ``sd``."""
-    z = (delta - distance) / sd
-    if span < 1e-6 * sd:
-        return math.exp(-0.5 * z * z) / (_SQRT2PI * sd)
-    return _normal_mass(z - span / sd, z) / span
-
-
 @numba.njit(cache=True, nogil=True)
-def angle_weights(walls, heading, angle, angle_sd, cutoff, out):
-    """Angle likelihood of every wall of every arena ``walls (A, V, 8)`` into ``out (A, V)``;
-    zero beyond ``cutoff`` standard deviations."""
-    n_arenas, n_walls = walls.shape[0], walls.shape[1]
+def contact_terms(walls, heading, angle, path_length, angle_obs_var, angle_wall_var,
+                  distance_var, path_length_error, cutoff, weight, reach, sd):
+    """Per wall of every arena (``walls (A, V, 8)``), the terms of a contact step's
+    likelihood (module docstring), into ``(A, V)`` arrays: the angle likelihood ``weight``
+    (zero beyond ``cutoff`` s.d.), the V's depth ``reach`` :math:`\hat\ell|\cos\hat\beta_k|`
+    and the s.d. :math:`\sigma_k` of the contact distance."""
+    total_var = angle_obs_var + angle_wall_var
+    angle_sd = math.sqrt(total_var)
     norm = 1.0 / (_SQRT2PI * angle_sd)
-    for a in range(n_arenas):
-        for k in range(n_walls):
-            e = _wrap(angle - (walls[a, k, 7] + math.pi - heading)) / angle_sd
-            out[a, k] = norm * math.exp(-0.5 * e * e) if abs(e) <= cutoff else 0.0
+    share = angle_wall_var / total_var
+    beta_var = angle_obs_var * angle_wall_var / total_var
+    for a in range(walls.shape[0]):
+        for k in range(walls.shape[1]):
+            error = _wrap(angle - (walls[a, k, 7] + math.pi - heading))
+            z = error / angle_sd
+            weight[a, k] = norm * math.exp(-0.5 * z * z) if abs(z) <= cutoff else 0.0
+            beta = angle - share * error
+            c, s = abs(math.cos(beta)), math.sin(beta)
+            reach[a, k] = path_length * c
+            spread = path_length_error ** 2 * c * c + beta_var * s * s
+            sd[a, k] = math.sqrt(distance_var + 0.25 * path_length ** 2 * spread)
 
 
 @numba.njit(cache=True, nogil=True)

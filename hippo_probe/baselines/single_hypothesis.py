@@ -8,7 +8,7 @@ from ..tasks import TaskConfig
 from ._common import (BaselineResult, provenance, resolve_start, resolve_task,
                       start_guess)
 from .config import BaselineConfig
-from .contact import ContactModel, Observations, retreat_span, wall_angle_error, wall_table
+from .contact import ContactModel, Observations, mean_retreat, wall_angle_error, wall_table
 from .path_integration import to_target_frame
 
 
@@ -26,8 +26,8 @@ def single_hypothesis(batch, *, start: str | None = None, config: TaskConfig | N
        see :mod:`~hippo_probe.baselines.contact`); if none agrees, the best-agreeing
        wall;
     2. on each candidate wall, the point of the wall nearest to :math:`\hat x`, moved
-       inwards by the expected end-of-step distance :math:`d + a/2` (sensed distance
-       plus the mean retreat after the contact);
+       inwards by the expected end-of-step distance :math:`d + (S - 1)\Delta_k / 2`
+       (sensed distance plus the mean retreat after the contact);
     3. :math:`\hat x` jumps to the nearest of these points.
 
     No uncertainty is carried: a reset onto the wrong wall is believed until the next
@@ -74,12 +74,11 @@ def single_hypothesis(batch, *, start: str | None = None, config: TaskConfig | N
         estimate += obs.displacement[:, t]
         touched = np.flatnonzero(obs.contact[:, t])
         if touched.size:
-            estimate[touched] = _reset(estimate[touched], walls[touched],
-                                       obs.heading[touched, t], obs.angle[touched, t],
-                                       obs.distance[touched, t]
-                                       + 0.5 * retreat_span(model, obs.path_length[touched, t],
-                                                            obs.angle[touched, t]),
-                                       gate)
+            heading, angle = obs.heading[touched, t, None], obs.angle[touched, t, None]
+            offset = obs.distance[touched, t, None] + mean_retreat(
+                model, walls[touched, :, 7], heading, angle, obs.path_length[touched, t, None])
+            estimate[touched] = _reset(estimate[touched], walls[touched], heading, angle,
+                                       offset, gate)
             n_resets[touched] += 1
         track[t] = estimate
     return BaselineResult("sh", to_target_frame(track, origin, config),
@@ -90,13 +89,13 @@ def single_hypothesis(batch, *, start: str | None = None, config: TaskConfig | N
 
 def _reset(points, walls, heading, angle, offset, gate):
     """New hypotheses (n, 2) for n contacts: see :func:`single_hypothesis`, steps 1-3."""
-    error = np.abs(wall_angle_error(walls[..., 7], heading[:, None], angle[:, None]))
+    error = np.abs(wall_angle_error(walls[..., 7], heading, angle))
     candidate = error <= gate
     best = np.argmin(error, axis=1)
     candidate[np.arange(len(points)), best] |= ~candidate.any(axis=1)
     a, e, n = walls[..., 0:2], walls[..., 2:4], walls[..., 5:7]
     p = points[:, None, :]
     along = np.clip(np.sum((p - a) * e, axis=-1) * walls[..., 4], 0.0, 1.0)
-    target = a + along[..., None] * e + offset[:, None, None] * n
+    target = a + along[..., None] * e + offset[..., None] * n
     jump = np.where(candidate, np.linalg.norm(target - p, axis=-1), np.inf)
     return target[np.arange(len(points)), np.argmin(jump, axis=1)]

@@ -39,8 +39,9 @@ def _record(a):
     batch = make_trials(task, a.trials, a.split, a.seed)
     baselines = None
     if a.baselines:
-        from ..baselines.io import load_baselines_for_record
-        baselines = load_baselines_for_record(a.baselines, batch)
+        from ..baselines.results import open_baselines
+        from .record import baselines_from_dataset
+        baselines = baselines_from_dataset(open_baselines(a.baselines), batch)
     rec = record(net, batch, baselines=baselines, checkpoint=str(a.network))
     save_recording(rec, a.out, overwrite=a.overwrite)
     print(f"saved {a.out}: {rec.sizes['time']} samples x {rec.sizes['unit']} units")

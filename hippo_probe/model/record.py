@@ -23,6 +23,25 @@ BASELINE_VARIABLES = {
 }
 
 
+def baselines_from_dataset(ds, batch) -> dict:
+    """Arrays (T, B, ...) for ``record(..., baselines=...)`` from the dataset written by
+    ``hippo-probe baselines`` (:mod:`hippo_probe.baselines.results`), matched to the
+    batch's trials by trial index; checks that its true positions are the batch's."""
+    missing = sorted(set(batch.trial_index.tolist()) - set(ds.trial_id.values.tolist()))
+    if missing:
+        raise ValueError(f"`baselines` file lacks trials {missing[:5]} of the batch "
+                         f"(it has {ds.sizes['trial_id']} trials)")
+    ds = ds.sel(trial_id=batch.trial_index)
+    position = np.moveaxis(ds["position"].values, 0, 1)
+    if position.shape != batch.position.shape or not np.allclose(position, batch.position,
+                                                                 atol=1e-6):
+        raise ValueError("`baselines` file was made from other trials (its positions differ "
+                         "from the batch's): rerun `hippo-probe baselines` with the same "
+                         "task, split and seed")
+    return {name: np.moveaxis(ds[name].values, 0, 1) for name in BASELINE_VARIABLES
+            if name in ds}
+
+
 @torch.no_grad()
 def run_network(network, batch, chunk: int = 250):
     """(h (T,B,H) float32, xy (T,B,2), probabilities (T,B,C) or None) on a TrialBatch."""

@@ -1,0 +1,62 @@
+"""Every paper-figure script and the network-vs-rodent comparison run end to end on a
+tiny configuration (a handful of trials) from the shipped networks."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def figures(tmp_path_factory):
+    out = tmp_path_factory.mktemp("figures")
+    run = subprocess.run([sys.executable, "-m", "hippo_probe.cli", "figures", "--size",
+                          "tiny", "--out", str(out)], capture_output=True, text=True,
+                         cwd=ROOT, timeout=1200)
+    assert run.returncode == 0, run.stderr[-4000:]
+    return out
+
+
+@pytest.mark.parametrize("name", ["fig2", "fig3", "fig4", "fig5"])
+def test_figure_written_with_numbers(figures, name):
+    for ext in ("png", "pdf", "json"):
+        assert (figures / f"{name}.{ext}").stat().st_size > 1000
+    data = json.loads((figures / f"{name}.json").read_text())
+    assert data["figure"] == name and data["size"]["name"] == "tiny"
+    assert set(data["networks"]) >= {"localization", "generalized", "specialized"}
+
+
+def test_fig2_numbers_are_errors_in_metres(figures):
+    data = json.loads((figures / "fig2.json").read_text())
+    curves = data["euclidean"]
+    assert set(curves) == {"network", "particle filter (oracle)", "single hypothesis",
+                           "path integration"}
+    for values in curves.values():
+        finite = [v for v in values if v is not None]
+        assert finite and all(0 <= v < 3 for v in finite)   # within a 1 m arena's span
+
+
+def test_results_table(figures, tmp_path):
+    out = tmp_path / "RESULTS.md"
+    run = subprocess.run([sys.executable, str(ROOT / "paper_figures" / "results.py"),
+                          "--figures", str(figures), "--out", str(out)],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    text = out.read_text()
+    assert text.count("\n| ") >= 10 and "1.5x" in text
+
+
+def test_network_vs_rodent(tmp_path):
+    run = subprocess.run([sys.executable, str(ROOT / "analyses" / "network_vs_rodent.py"),
+                          "--size", "tiny", "--out", str(tmp_path)], capture_output=True,
+                         text=True, cwd=ROOT, timeout=900)
+    assert run.returncode == 0, run.stderr[-3000:]
+    table = json.loads((tmp_path / "network_vs_rodent.json").read_text())["table"]
+    # the real ADn cells are head-direction tuned, CA1 cells much less (README facts)
+    assert table["mouse ADn"]["median_mvl"] > 0.8
+    assert table["mouse CA1"]["median_mvl"] < 0.56
+    assert table["network (localization)"]["units"] == 256

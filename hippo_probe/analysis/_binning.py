@@ -26,7 +26,8 @@ from .config import COMPUTE
 
 
 @numba.njit(cache=True, nogil=True)
-def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_sq):
+def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_min,
+                want_sq):
     """Add the samples of one time block to the accumulators (in place).
 
     activity : (m, U) block of samples ``t0 .. t0 + m`` of the recording
@@ -34,7 +35,7 @@ def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_
     shifts : (K,) circular shifts; shift ``k`` pairs activity at ``t`` with ``bins[t - s]``
     lo : compact bins are stored at ``index - lo`` (a block touches a narrow range)
     sums : (K, n_local, U) float64; counts : (K, n_local) int64
-    amin : (U,) running minimum over all samples (valid or not)
+    amin : (U,) running minimum over all samples (valid or not), if ``want_min``
     sumsq : (n_local, U) per-bin sum of squares (unshifted bins), if ``want_sq``
     """
     m, n_units = activity.shape
@@ -42,8 +43,10 @@ def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_
     n_shifts = shifts.shape[0]
     for i in range(m):
         row = activity[i]
+        if want_min:
+            for u in range(n_units):
+                amin[u] = min(amin[u], row[u])
         t = t0 + i
-        touched = False
         for k in range(n_shifts):
             src = t - shifts[k]
             if src < 0:
@@ -54,23 +57,12 @@ def _accumulate(activity, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_
             b -= lo
             counts[k, b] += 1
             acc = sums[k, b]
-            if k == 0:
-                # the running minimum rides along the first pass over the row
-                touched = True
-                for u in range(n_units):
-                    v = row[u]
-                    acc[u] += v
-                    amin[u] = min(amin[u], v)
-                if want_sq:
-                    sq = sumsq[b]
-                    for u in range(n_units):
-                        sq[u] += row[u] * row[u]
-            else:
-                for u in range(n_units):
-                    acc[u] += row[u]
-        if not touched:
             for u in range(n_units):
-                amin[u] = min(amin[u], row[u])
+                acc[u] += row[u]
+            if want_sq and k == 0:
+                sq = sumsq[b]
+                for u in range(n_units):
+                    sq[u] += row[u] * row[u]
 
 
 @dataclass
@@ -84,7 +76,8 @@ class BinSums:
     counts : ndarray (K, n_bins)
         Number of samples in each bin (identical for every shift of a permutation).
     amin : ndarray (U,)
-        Each unit's minimum activity over every sample of the recording.
+        Each unit's minimum activity over every sample of the recording (NaN if not
+        asked for).
     sumsq : ndarray (n_bins, U) or None
         Sum of squared activity over the samples of each bin (unshifted), if asked.
     """
@@ -109,7 +102,7 @@ def _block_range(bins, shifts, t0, t1):
     return (0, -1) if hi < 0 else (lo, hi)
 
 
-def _partial(block, bins, t0, shifts, want_sq):
+def _partial(block, bins, t0, shifts, want_min, want_sq):
     """Reduce one (time, unit) block to (lo, sums, counts, amin, sumsq)."""
     block = np.ascontiguousarray(block)
     n_units = block.shape[1]
@@ -121,13 +114,14 @@ def _partial(block, bins, t0, shifts, want_sq):
     sumsq = np.zeros((width if want_sq else 0, n_units))
     if block.dtype.kind not in "fiu" or block.dtype == np.float16:
         block = block.astype(np.float64)
-    _accumulate(block, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_sq)
-    return lo, sums, counts, amin, sumsq
+    _accumulate(block, bins, t0, shifts, lo, sums, counts, amin, sumsq, want_min, want_sq)
+    return lo, sums, counts, amin if want_min else np.full(n_units, np.nan), sumsq
 
 
 def _combine(parts):
     """Add partials that may cover different compact-bin ranges."""
     amin = np.minimum.reduce([p[3] for p in parts])  # blocks with no valid sample count too
+    # (NaN when the minimum was not tracked: np.minimum propagates it)
     want_sq = any(p[4].shape[0] for p in parts)
     parts = [p for p in parts if p[1].shape[1] > 0] or parts[:1]
     lo = min(p[0] for p in parts)
@@ -159,24 +153,26 @@ def _finish(part, n_bins):
     return BinSums(full_sums, full_counts, amin, full_sq)
 
 
-def _eager(activity, bins, shifts, want_sq, threads):
+def _eager(activity, bins, shifts, want_min, want_sq, threads):
     """In-memory samples: contiguous blocks reduced in parallel threads (the kernel
     releases the GIL), then combined."""
     n = len(activity)
     threads = numba.get_num_threads() if threads is None else threads
     threads = max(1, min(threads, n // COMPUTE.min_samples_per_thread))
     if threads == 1:
-        return _partial(activity, bins, 0, shifts, want_sq)
+        return _partial(activity, bins, 0, shifts, want_min, want_sq)
     from concurrent.futures import ThreadPoolExecutor
 
     edges = np.linspace(0, n, threads + 1).astype(int)
     with ThreadPoolExecutor(threads) as pool:
-        parts = list(pool.map(lambda a, b: _partial(activity[a:b], bins, a, shifts, want_sq),
-                              edges[:-1], edges[1:]))
+        parts = list(pool.map(
+            lambda a, b: _partial(activity[a:b], bins, a, shifts, want_min, want_sq),
+            edges[:-1], edges[1:]))
     return _combine(parts)
 
 
-def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False, threads=None):
+def bin_sums(activity, bins, n_bins, shifts=(0,), want_min=True, want_sq=False,
+             threads=None):
     """Per-bin sample counts and activity sums, in one pass over the samples.
 
     .. math:: S_{k,b,u} = \\sum_{t:\\, bins[t - s_k] = b} a_{t,u}, \\qquad
@@ -192,6 +188,9 @@ def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False, threads=None):
         Number of bins.
     shifts : sequence of int
         Circular shifts (in samples) of ``bins`` against ``activity``; 0 = no shift.
+    want_min : bool
+        Also track each unit's minimum over all samples (for the non-negative shift of
+        signed activity).
     want_sq : bool
         Also sum the squared activity per bin (unshifted).
     threads : int, optional
@@ -205,7 +204,8 @@ def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False, threads=None):
     bins = np.ascontiguousarray(bins, dtype=np.int64)
     shifts = np.asarray(shifts, dtype=np.int64) % max(len(bins), 1)
     if not hasattr(activity, "dask"):
-        return _finish(_eager(np.asarray(activity), bins, shifts, want_sq, threads), n_bins)
+        return _finish(_eager(np.asarray(activity), bins, shifts, want_min, want_sq, threads),
+                       n_bins)
 
     import dask
 
@@ -217,7 +217,7 @@ def bin_sums(activity, bins, n_bins, shifts=(0,), want_sq=False, threads=None):
     starts = np.concatenate([[0], np.cumsum(activity.chunks[0])[:-1]])
     columns = []
     for j in range(blocks.shape[1]):
-        parts = [partial(blocks[i, j], bins_d, int(starts[i]), shifts_d, want_sq)
+        parts = [partial(blocks[i, j], bins_d, int(starts[i]), shifts_d, want_min, want_sq)
                  for i in range(blocks.shape[0])]
         while len(parts) > 1:
             parts = [combine(parts[i:i + COMPUTE.split_every])

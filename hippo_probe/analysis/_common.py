@@ -68,26 +68,35 @@ def rate_scale(rec) -> tuple[float, str, str]:
     return 1.0, act.attrs.get("units", "1"), f"mean {name}"
 
 
-def nonnegative_offset(rec, amin) -> tuple[np.ndarray, str]:
+def tracks_minimum(rec) -> bool:
+    """Whether each unit's minimum over the recording is needed (not a non-negative kind)."""
+    return rec.attrs.get("activity_kind") not in CONVENTIONS.nonnegative_kinds
+
+
+def nonnegative_offset(rec, amin, floor=None) -> tuple[np.ndarray, str]:
     """Per-unit offset subtracted to make activity a non-negative rate, and why.
 
     Signed kinds (``CONVENTIONS.signed_kinds``, e.g. the LSTM's h) are shifted by each
-    unit's minimum over the recording. Other kinds are used as they are, unless they hold
-    negative values, which are shifted the same way with a warning.
+    unit's minimum over the recording (``amin``). Other kinds are used as they are unless
+    they hold negative values, which are shifted the same way with a warning; when the
+    minimum was not tracked (non-negative kinds), ``floor`` (each unit's minimum of its
+    map or curve) stands in for it.
     """
     amin = np.asarray(amin, float)
     kind = rec.attrs.get("activity_kind")
     if kind in CONVENTIONS.signed_kinds:
         return amin, (f"activity_kind {kind!r} is signed: each unit's activity minus its "
                       "minimum over the recording")
-    if np.any(amin < 0):
+    tracked = np.isfinite(amin).all()
+    low = amin if tracked or floor is None else np.asarray(floor, float)
+    if np.any(low < 0):
+        what = "activity" if tracked else "map"
         warnings.warn(
-            f"activity (kind {kind!r}) has negative values; each unit's activity minus its "
-            "minimum over the recording is used as a non-negative rate", AnalysisWarning,
-            stacklevel=3)
-        return np.minimum(amin, 0.0), ("negative values found: each unit's activity minus "
-                                       "its minimum over the recording (units with "
-                                       "min >= 0 unchanged)")
+            f"activity (kind {kind!r}) has negative values; each unit's {what} minus its "
+            "minimum is used as a non-negative rate", AnalysisWarning, stacklevel=3)
+        return np.minimum(np.nan_to_num(low, nan=0.0), 0.0), (
+            f"negative values found: each unit's {what} minus its minimum (units with "
+            "min >= 0 unchanged)")
     return np.zeros_like(amin), "none: activity is non-negative"
 
 

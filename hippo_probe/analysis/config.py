@@ -25,10 +25,16 @@ class RecordingConventions:
         Kinds whose activity is a spike count per sample: maps are divided by ``dt`` and
         reported in Hz; the Rayleigh test is reported for these only (it assumes
         independent events).
+    nonnegative_kinds : tuple of str
+        Kinds that are non-negative by definition: their minimum over the recording is not
+        tracked (it costs about 15% of a rate-map pass); should their maps or curves show
+        negative values all the same, the map's minimum is used for the shift, with a
+        warning.
     """
 
     signed_kinds: tuple = ("lstm_hidden",)
     spike_kinds: tuple = ("spike_count",)
+    nonnegative_kinds: tuple = ("spike_count", "rate")
 
 
 @dataclass(frozen=True)

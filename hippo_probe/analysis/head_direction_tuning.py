@@ -138,7 +138,9 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     curves[..., counts == 0] = np.nan
     scale, units, long_name = _common.rate_scale(rec)
     curves *= scale
-    offset, why_offset = _common.nonnegative_offset(rec, res.amin * scale)
+    first = curves[0].reshape(curves.shape[1], -1)
+    floor = np.where(np.isfinite(first), first, np.inf).min(axis=1)
+    offset, why_offset = _common.nonnegative_offset(rec, res.amin * scale, floor)
     theta = -np.pi + (np.arange(n_bins) + 0.5) * 2 * np.pi / n_bins
     length, phase = mean_vector(curves - offset[None, :, None, None], theta)
 

@@ -161,7 +161,8 @@ def tuning_sums(rec, bins, groups, n_groups, n_bins, shifts=(0,), want_sq=False)
     grid, so accumulators stay small even for many groups.
     """
     small, occupied = compact(bins, groups, n_bins, n_groups)
-    res = bin_sums(_common.activity(rec).data, small, len(occupied), shifts, want_sq)
+    res = bin_sums(_common.activity(rec).data, small, len(occupied), shifts,
+                   want_min=_common.tracks_minimum(rec), want_sq=want_sq)
     n_shifts, _, n_units = res.sums.shape
 
     def grid(a):  # (..., n_occupied, U) -> (..., U, G, n_bins)
@@ -248,8 +249,11 @@ def _maps_dataarray(rec, parts, maps, *, by, min_speed):
             first = np.unique(parts["codes"], return_index=True)[1]
             coords["environment"] = (dim, env[first], rec["environment"].attrs)
     coords["occupancy"] = (occ_dims, occ, {"units": "s", "long_name": "occupancy"})
-    coords["activity_min"] = ("unit", parts["res"].amin * scale,
-                              {"units": units, "long_name": "minimum over the recording"})
+    min_attrs = {"units": units, "long_name": "minimum over the recording"}
+    if not _common.tracks_minimum(rec):
+        min_attrs["note"] = (f"NaN: not tracked, activity_kind "
+                             f"{rec.attrs.get('activity_kind')!r} is non-negative")
+    coords["activity_min"] = ("unit", parts["res"].amin * scale, min_attrs)
     attrs = _common.provenance(
         "ratemaps", rec, bin_size=grid.bin_size, sigma=parts["sigma"],
         sigma_units="bins", min_occupancy=parts["min_occupancy"], min_speed=min_speed,

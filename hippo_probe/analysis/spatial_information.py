@@ -128,8 +128,10 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
         attrs_from = maps.attrs
 
     kind_rec = rec if rec is not None else xr.Dataset(attrs=attrs_from)
-    offset, why_offset = _common.nonnegative_offset(kind_rec, maps["activity_min"].values)
     check_dims("rec_or_maps", maps, ("unit", "y", "x"))
+    floor = maps.min([d for d in maps.dims if d != "unit"], skipna=True).values
+    offset, why_offset = _common.nonnegative_offset(kind_rec, maps["activity_min"].values,
+                                                    floor)
     lead = tuple(d for d in maps.dims if d not in ("y", "x"))
     maps = maps.transpose(*lead, "y", "x")
     axes = (-2, -1)

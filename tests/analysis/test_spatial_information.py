@@ -117,3 +117,16 @@ def test_dask_and_shuffles_lazy_equal_eager(place_rec):
                                   seed=3)
     for name in ("information", "shuffle_mean", "information_corrected"):
         np.testing.assert_allclose(lazy[name].values, eager[name].values, rtol=1e-10)
+
+
+def test_negative_values_in_a_nonnegative_kind_are_shifted_with_a_warning():
+    rec, _ = _half_arena_recording()
+    rec["activity"] = rec.activity - 0.5  # "rate" kind, but now half negative
+    maps = hp.ratemaps(rec, bin_size=0.1, sigma=0)
+    assert np.isnan(maps.activity_min).all() and "not tracked" in maps.activity_min.attrs["note"]
+    with pytest.warns(AnalysisWarning, match="negative values"):
+        info = hp.spatial_information(maps)
+    assert "map minus its minimum" in info.attrs["rate_offset"]
+    # unit 0 (0/1 -> -0.5/0.5): shifting by the map's minimum restores the 0/1 unit
+    q = (_half_arena_recording()[1][:, 0] < 0).mean()
+    assert info.information.sel(unit=0).item() == pytest.approx(-np.log2(q), rel=1e-6)

@@ -21,6 +21,8 @@ def add_commands(sub):
                    help="particles of the oracular PF per trial (default 1000)")
     p.add_argument("--slam-particles", type=int, default=None,
                    help="particles of PF-SLAM per trial, specialized task (default 10000)")
+    p.add_argument("--prior-trials", type=int, default=None,
+                   help="training trials of the naive-Bayes prior (default 2000)")
     p.add_argument("--threads", type=int, default=None,
                    help="threads of the particle filters (default: all cores)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing FILE")
@@ -33,6 +35,7 @@ def _baselines(args):
 
     from .._validators import check_option
     from ..tasks import SPLITS, TASKS, make_trials, task_config
+    from .config import BaselineConfig, NaiveBayesConfig
     from .results import error_table, plot_errors, run_baselines, save_baselines
 
     check_option("task", args.task, TASKS)
@@ -44,8 +47,10 @@ def _baselines(args):
         task_config(args.task).split_size(args.split)
     began = time.perf_counter()
     batch = make_trials(args.task, n_trials, args.split, args.seed, first=args.first)
+    baseline = BaselineConfig() if args.prior_trials is None else \
+        BaselineConfig(naive_bayes=NaiveBayesConfig(prior_trials=args.prior_trials))
     ds = run_baselines(batch, n_particles=args.particles, slam_particles=args.slam_particles,
-                       threads=args.threads, progress=True)
+                       threads=args.threads, progress=True, baseline=baseline)
     save_baselines(ds, out, overwrite=args.overwrite)
     print(error_table(ds))
     print(f"saved {out} ({time.perf_counter() - began:.0f} s)")

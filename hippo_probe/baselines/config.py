@@ -118,7 +118,8 @@ class NaiveBayesConfig:
         estimate and tends to path integration when its variance is below a cell.
     time_window : int
         5: the prior at step t pools the targets of steps t-5 ... t+5 (4 s), which
-        changes little over that time once the start is seconds past.
+        changes little over that time once the start is seconds past (fewer steps
+        before t = 5, where it does change quickly).
     """
 
     prior_trials: int = 2000

@@ -106,7 +106,7 @@ def post_contact_turn_variance(motion: MotionConfig) -> float:
     Examples
     --------
     >>> round(post_contact_turn_variance(MotionConfig()) ** 0.5, 3)
-    0.1
+    0.093
     """
     dt, tau = motion.fine_dt, motion.turn_tau
     rho = 1.0 - dt / tau
@@ -275,7 +275,7 @@ def _normal_mass(lo, hi):
 @numba.njit(cache=True, nogil=True)
 def contact_terms(walls, heading, angle, path_length, angle_obs_var, angle_wall_var,
                   distance_var, path_length_error, cutoff, weight, reach, sd):
-    """Per wall of every arena (``walls (A, V, 8)``), the terms of a contact step's
+    r"""Per wall of every arena (``walls (A, V, 8)``), the terms of a contact step's
     likelihood (module docstring), into ``(A, V)`` arrays: the angle likelihood ``weight``
     (zero beyond ``cutoff`` s.d.), the V's depth ``reach`` :math:`\hat\ell|\cos\hat\beta_k|`
     and the s.d. :math:`\sigma_k` of the contact distance."""

@@ -8,7 +8,8 @@ a trial. Exactly:
   start in the generalized task, the arena-frame position otherwise) ``t`` steps into a
   trial, across the task's ensemble of arenas and trajectories, estimated from
   ``prior_trials`` trials of the *training* split: a 2-D histogram on a ``G x G`` grid
-  (cell ``h``), pooling steps ``t - w ... t + w``, read as a mixture of isotropic Gaussian
+  (cell ``h``), pooling steps ``t - w ... t + w`` (``w <= t``, so the first steps,
+  where the prior widens quickly, pool only their neighbours), read as a mixture of isotropic Gaussian
   kernels of variance ``s^2 = h^2 / 12`` (that of a uniform cell) at the cell centres
   :math:`c_j` with the cell counts as weights :math:`\pi_{tj}`. The prior knows nothing of
   the trial's own arena (its walls are novel in the generalized task).
@@ -122,8 +123,9 @@ def _target_prior(task, seed, config, nb: NaiveBayesConfig) -> TargetPrior:
     cumulative = np.concatenate([np.zeros((1,) + per_step.shape[1:]),
                                  np.cumsum(per_step, axis=0)])
     steps = np.arange(n_steps)
-    upper = np.minimum(steps + nb.time_window + 1, n_steps)
-    lower = np.maximum(steps - nb.time_window, 0)
+    window = np.minimum(steps, nb.time_window)       # early on the prior changes fast
+    upper = np.minimum(steps + window + 1, n_steps)
+    lower = steps - window
     counts = cumulative[upper] - cumulative[lower]
     counts.setflags(write=False)
     return TargetPrior(centres[0], centres[1], counts, cell, task, nb.prior_split, seed,

@@ -34,7 +34,8 @@ def _grid(n, max_cols):
 
 
 def _outline(maps, group_dim, label):
-    """Arena outline (V, 2) of a map's environment, or None."""
+    """Arena outline (V, 2) of the environment of maps already reduced to one group, or
+    None when it is unknown or ambiguous (several arenas pooled)."""
     verts = maps.attrs.get("arena_vertices")
     envs = maps.attrs.get("arena_environment")
     if verts is None or envs is None:
@@ -42,9 +43,8 @@ def _outline(maps, group_dim, label):
     verts, envs = np.asarray(verts), np.asarray(envs)
     if group_dim == "environment":
         env = label
-    elif "environment" in maps.coords and group_dim is not None and \
-            maps["environment"].dims == (group_dim,):
-        env = maps["environment"].sel({group_dim: label}).item()
+    elif "environment" in maps.coords and maps["environment"].ndim == 0:
+        env = maps["environment"].item()  # e.g. the environment of a trial's map
     elif len(envs) == 1:
         env = envs[0]
     else:
@@ -53,7 +53,8 @@ def _outline(maps, group_dim, label):
     return verts[hit[0]] if hit.size else None
 
 
-def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", panel=1.6):
+def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", panel=1.6,
+                 scale="unit"):
     """A grid of rate maps, one panel per unit, with the arena outline when known.
 
     Parameters
@@ -64,6 +65,9 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
         Unit ids to show (default: all, at most 64).
     group : label, optional
         Which environment/trial to show when the maps have a group dim (default: the first).
+    scale : {"unit", "shared"}
+        Colour scale per panel (each map from its minimum to its maximum, written in the
+        title) or one scale for all panels, with a colour bar.
     """
     plt = _plt()
     group_dim = next((d for d in maps.dims if d not in ("unit", "y", "x")), None)
@@ -83,10 +87,12 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
     ext = (x[0] - half, x[-1] + half, y[0] - half, y[-1] + half)
     colours = plt.get_cmap(cmap).with_extremes(bad="white")  # unvisited bins
     pad = 0.04 * max(ext[1] - ext[0], ext[3] - ext[2])
+    shared = dict(vmin=float(maps.min()), vmax=float(maps.max())) if scale == "shared" \
+        else {}
     for ax, u in zip(axes.flat, maps["unit"].values):
         m = maps.sel(unit=u)
         im = ax.imshow(m.values, origin="lower", extent=ext, cmap=colours,
-                       interpolation="nearest")
+                       interpolation="nearest", **shared)
         if outline is not None:
             closed = np.vstack([outline, outline[:1]])
             ax.plot(closed[:, 0], closed[:, 1], color="0.2", lw=0.8)
@@ -94,8 +100,11 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
         ax.set_ylim(ext[2] - pad, ext[3] + pad)
         for spine in ax.spines.values():
             spine.set_visible(False)
-        peak = np.nanmax(m.values) if np.isfinite(m.values).any() else np.nan
-        ax.set_title(f"{u}  max {peak:.2g}", fontsize=7)
+        if np.isfinite(m.values).any():
+            ax.set_title(f"{u}  {np.nanmin(m.values):.2g}..{np.nanmax(m.values):.2g}",
+                         fontsize=7)
+        else:
+            ax.set_title(f"{u}  (no data)", fontsize=7)
         ax.set_xticks([])
         ax.set_yticks([])
     for ax in list(axes.flat)[maps.sizes["unit"]:]:
@@ -107,7 +116,8 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
     corner = axes[-1, 0] if (rows - 1) * cols < maps.sizes["unit"] else axes[0, 0]
     corner.set_xlabel(_label(maps["x"]), fontsize=7)
     corner.set_ylabel(_label(maps["y"]), fontsize=7)
-    fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.6, label=_label(maps))
+    if scale == "shared":
+        fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.6, label=_label(maps))
     return fig
 
 

@@ -38,16 +38,22 @@ def test_ratemaps_plot_themselves_with_arena_outline(place):
     # the square arena's outline is drawn on every panel
     outline = panels[0].get_lines()[0].get_xydata()
     np.testing.assert_allclose(np.abs(outline), 0.5)
-    assert fig.axes[-1].get_ylabel() == "mean activity (Hz)"  # colour bar
+    assert fig._suptitle.get_text() == "mean activity (Hz)"
+    assert panels[0].get_title().endswith("..0.65")  # each panel: its own range
+    shared = maps.hp.plot(scale="shared")
+    assert shared.axes[-1].get_ylabel() == "mean activity (Hz)"  # one colour bar
     assert panels[0].get_xlabel() == "x position (m)"
     assert panels[0].get_ylabel() == "y position (m)"
 
 
-def test_grouped_maps_plot_one_group():
+def test_grouped_maps_plot_one_group_with_its_arena():
     rec = two_environment_recording(n_units=4, n_trials=4, samples_per_trial=800)
     maps = hp.ratemaps(rec, bin_size=0.1, by="environment")
     fig = maps.hp.plot(group=1)
     assert "environment 1" in fig._suptitle.get_text()
+    by_trial = hp.ratemaps(rec, bin_size=0.1, by="trial").hp.plot(group=3)
+    assert "trial 3" in by_trial._suptitle.get_text()
+    assert by_trial.axes[0].get_lines()  # the trial's arena outline
 
 
 def test_hd_polar_titles_carry_r_and_direction():

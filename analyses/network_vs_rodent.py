@@ -31,8 +31,8 @@ sys.path.insert(0, str(ROOT / "paper_figures"))
 import _common as C  # noqa: E402
 
 SESSION = ROOT / "tests" / "data" / "A2929-200711.nwb"
-BIN_ANIMAL = 0.04     # m: the mouse's arena is ~0.5 m across
-BIN_NETWORK = 0.08    # m: the network's arena is 2 m across; ~25 x 25 bins in both
+BIN_ANIMAL = 0.04     # m: the mouse's arena is ~0.5 m across (~12 x 12 bins)
+BIN_NETWORK = 0.16    # m: the network's arena is ~2 m across (~13 x 13 bins)
 HD_BINS = 60
 
 
@@ -75,7 +75,8 @@ def main():
     for ax, key, label in zip(axes, ("mean_vector_length", "spatial_information",
                                      "selectivity"),
                               ("head-direction mean vector length R",
-                               "Skaggs spatial information (per unit of activity)",
+                               "Skaggs information (mouse: bits/spike; network: bits per "
+                               "unit of activity)",
                                "spatial selectivity (variance explained)")):
         for name, g in groups.items():
             v = np.sort(g[key][np.isfinite(g[key])])

@@ -52,11 +52,21 @@ def _figures(args):
     results = _load("results")
     import sys
     argv = sys.argv
-    sys.argv = ["results.py", "--figures", str(out)]
+    # the repository's RESULTS.md only from full-size data; other sizes write beside
+    # their figures
+    table = (ROOT / "paper_figures" / "RESULTS.md") if args.size in ("full", "paper") \
+        else out / "RESULTS.md"
+    sys.argv = ["results.py", "--figures", str(out), "--out", str(table)]
     try:
         results.main()
     finally:
         sys.argv = argv
+    comparison = ROOT / "analyses" / "network_vs_rodent.py"
+    if comparison.exists():
+        print("== network vs rodent ==")
+        import subprocess
+        subprocess.run([sys.executable, str(comparison), "--size", args.size, "--out",
+                        str(out)], check=True)
     print(f"all figures in {out}/ ({time.time() - t_all:.0f} s)")
 
 

@@ -76,6 +76,14 @@ def network_file(name: str) -> Path:
     return resolve_network_file(name)
 
 
+def code_version() -> str:
+    """Hash of the package's sources: a cached recording made by other code is rebuilt."""
+    h = hashlib.sha1()
+    for path in sorted((ROOT / "hippo_probe").rglob("*.py")):
+        h.update(path.read_bytes())
+    return h.hexdigest()[:12]
+
+
 def _digest(*parts) -> str:
     h = hashlib.sha1()
     for p in parts:
@@ -127,7 +135,7 @@ def recording(name: str, cfg: FigureConfig):
     n_trials = getattr(cfg, size_attr)
     net_path = network_file(network)
     key = _digest(net_path.read_bytes(), name, n_trials, cfg.particles, cfg.seed,
-                  sorted(overrides.items()), which, hp.__version__)
+                  sorted(overrides.items()), which, code_version())
     path = cfg.cache / f"{name}.zarr"
     if path.exists():
         try:
@@ -141,7 +149,7 @@ def recording(name: str, cfg: FigureConfig):
     config = task_config(task, **overrides) if overrides else None
     batch = make_trials(task, n_trials, "test", cfg.seed, config=config)
     extra = baseline_estimates(batch, which, cfg.particles) if which else None
-    rec = hp.record(net, batch, baselines=extra, checkpoint=network,
+    rec = hp.record(net, batch, baselines=extra, checkpoint=network, config=config,
                     session_id=f"paper-{name}")
     rec.attrs["paper_key"] = key
     rec.attrs["paper_dataset"] = name
@@ -153,7 +161,7 @@ def recording(name: str, cfg: FigureConfig):
 
 def cached_arrays(name: str, cfg: FigureConfig, make, *key_parts) -> dict:
     """``make()`` -> dict of arrays, cached as ``<cache>/<name>.npz`` under a key."""
-    key = _digest(name, cfg, *key_parts, hp.__version__)
+    key = _digest(name, cfg, *key_parts, code_version())
     path = cfg.cache / f"{name}.npz"
     if path.exists():
         with np.load(path, allow_pickle=False) as f:

@@ -1,4 +1,4 @@
-"""Figure 2: localization in a familiar arena (1 m), start unknown.
+"""Figure 2: localization in a familiar arena (mean radius 1 m), start unknown.
 
 Euclidean, radial and angular error vs time in trial of the localization network, the
 oracular particle filter, single hypothesis and path integration, on the test split.
@@ -39,7 +39,8 @@ def make(cfg, out):
         ax.set_xlim(0, t[-1])
         ax.set_ylim(bottom=0)
     axes[0].legend(frameon=False, fontsize=8)
-    fig.suptitle("Fig. 2 — localization in a familiar 1 m arena (start unknown), "
+    fig.suptitle("Fig. 2 — localization in a familiar arena (mean radius 1 m, start "
+                 "unknown), "
                  f"{numbers['n_trials']} test trials, mean ± s.e.m.")
     numbers["summary"] = {
         C.LABELS[n]: C.at_times(t, err.euclidean.sel(estimate=n).values) for n in ESTIMATES}

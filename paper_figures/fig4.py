@@ -34,21 +34,18 @@ def _three_maps(rec):
     in_a = ids[env == a]
     half = len(in_a) // 2
     sets = [in_a[:half], in_a[half:], ids[env == b]]
-    v = rec.arena_vertices.values.reshape(-1, 2)
+    v = rec.arena_vertices.sel(environment_id=[a, b]).values.reshape(-1, 2)
     ext = (v[:, 0].min(), v[:, 0].max(), v[:, 1].min(), v[:, 1].max())   # one grid for all
     maps = [hp.ratemaps(hp.select_trials(rec, trials=s), bin_size=BIN, sigma=SIGMA,
                         extent=ext) for s in sets]
     return maps, (a, b)
 
 
-def _corr(m1, m2):
+def _corr(m1, m2, min_bins=5):
+    """Per-unit Pearson correlation of two rate maps over the bins both visited."""
+    from hippo_probe.analysis.place_field_stability import pearson_masked
     x, y = m1.values.reshape(len(m1.unit), -1), m2.values.reshape(len(m2.unit), -1)
-    out = np.full(len(x), np.nan)
-    for u in range(len(x)):
-        ok = np.isfinite(x[u]) & np.isfinite(y[u])
-        if ok.sum() > 3 and x[u, ok].std() > 0 and y[u, ok].std() > 0:
-            out[u] = np.corrcoef(x[u, ok], y[u, ok])[0, 1]
-    return out
+    return pearson_masked(x, y, min_bins)[0]
 
 
 def _maps_panel(sub, rec, title, numbers, key):
@@ -107,11 +104,12 @@ def make(cfg, out):
                 numbers, "A")
     _maps_panel(mid[0], gen_maps, "B  generalized network in novel arenas", numbers, "B")
 
-    hd = hp.head_direction_tuning(many, n_bins=36)
+    hd = hp.head_direction_tuning(many, n_bins=60)
     mvl = hd.mean_vector_length.values.ravel()
     show = np.argsort(-np.nan_to_num(mvl))[:20]
     theta = hd.direction.values
-    top[1].suptitle("C  head-direction tuning of the 20 most tuned units", fontsize=10)
+    top[1].suptitle("C  head-direction tuning of the 20 most tuned units (specialized "
+                    "network, 60 bins)", fontsize=10)
     for k, u in enumerate(show):
         ax = top[1].add_subplot(4, 5, k + 1, projection="polar")
         r = hd.tuning_curve.isel(unit=u).values
@@ -129,7 +127,7 @@ def make(cfg, out):
     ax.hist(mvl, bins=30, color="gray")
     ax.set_xlabel("mean vector length R (from the tuning curve)")
     ax.set_ylabel("units")
-    ax.set_title("C head-direction tuning, all units", fontsize=9)
+    ax.set_title("C head-direction tuning, all units (specialized network)", fontsize=9)
 
     sim = hp.remapping_similarity(many)
     ax = bottom[0].add_subplot(1, 1, 1)

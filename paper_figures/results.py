@@ -38,7 +38,7 @@ def rows(fig):
     pi_200 = gen and gen.get("path integration") and gen["path integration"][-1]
     yield ("Fig. 3A: in novel arenas the generalized network is within ~1.5x of the "
            "oracular PF and far better than path integration",
-           "≈ 1.5x PF; << PI",
+           "≈ 1.5x PF (approximate, read from the main text); << PI",
            f"network / PF error (t > 100 s) = {_fmt(_get(f3, 'A_ratio_network_to_pf_t_gt_100s'))}; "
            f"at 200 s: network {_fmt(gen and gen['network'][-1], '.3f')} m, PF "
            f"{_fmt(gen and gen['particle filter (oracle)'][-1], '.3f')} m, PI "
@@ -66,7 +66,8 @@ def rows(fig):
            f"{_fmt(_get(f3, 'D_network_error_at', '200s'), '.3f')} m")
     dims = _get(f5, "C_dimension") or {}
     yield ("Fig. 5C: correlation dimension of the hidden-state trajectories",
-           "5.5 / 5.6 / 8.5",
+           "5.5 / 5.6 / 8.5 (three networks; the mapping to networks is taken from the "
+           "project brief, the SI is unavailable)",
            " / ".join(f"{k} {_fmt(v, '.1f')}" for k, v in dims.items()) or "n/a")
     yield ("Fig. 5A: the PF's posterior covariance is linearly decodable from the units",
            "decodable",

@@ -77,7 +77,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numba
 import numpy as np
 
-from .._validators import check_number, check_positive
+from .._validators import check_positive
 from ..tasks import TaskConfig
 from ._common import (BaselineResult, provenance, resolve_start, resolve_task,
                       start_prior_samples)
@@ -185,9 +185,10 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
         counts[b] = _filter_trial(
             rng, x, y, x.copy(), y.copy(), arena.copy(), tables[table_of_trial[b]],
             obs.displacement[b], obs.heading[b], obs.turn[b], obs.contact[b], obs.distance[b],
-            obs.angle[b], obs.path_length[b], pf.intermediate_checks, noise.speed_sd, noise.rotation_sd, pf.resample_threshold, model.kernel_args(), model.heading_sd, model.touch_range,
-            model.min_clearance, model.outlier_probability, model.outlier_density, relative,
-            class_output, snapshot_of_step, estimate[b], mean[b], cov[b], classes[b],
+            obs.angle[b], obs.path_length[b], pf.intermediate_checks, noise.speed_sd,
+            noise.rotation_sd, pf.resample_threshold, model.kernel_args(), model.heading_sd,
+            model.touch_range, model.min_clearance, model.outlier_probability,
+            model.outlier_density, relative, class_output, snapshot_of_step, estimate[b], mean[b], cov[b], classes[b],
             snap_xy[b], snap_w[b], snap_arena[b])
 
     if threads == 1 or n_trials == 1:
@@ -257,8 +258,9 @@ def _nearest_walls(walls, x, y, best, nearest, crossings):
 
 @numba.njit(cache=True, nogil=True)
 def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact, distance,
-                  angle, path_length, n_checks, speed_sd, rotation_sd, resample_threshold, contact_args, heading_sd, touch_range,
-                  min_clearance, outlier_p, outlier_density, relative, class_output,
+                  angle, path_length, n_checks, speed_sd, rotation_sd, resample_threshold,
+                  contact_args, heading_sd, touch_range, min_clearance, outlier_p,
+                  outlier_density, relative, class_output,
                   snapshot_of_step, out_estimate, out_mean, out_cov, out_class, snap_xy,
                   snap_w, snap_arena):
     """One trial of the particle filter (module docstring, steps 1-4). Particles (``x, y``,

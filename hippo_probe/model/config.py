@@ -35,11 +35,16 @@ class ModelConfig:
         return len(self.input_scale)
 
 
+#: Typical size (rad) of the heading change over one network step, used to scale the
+#: ``dhd`` input: with 1 rad/s turning (MotionConfig.turn_sd) a 0.4 s step turns ~0.4 rad.
+TURN_SCALE = 0.5
+
+
 def input_scale_for(world: WorldConfig) -> tuple:
     """Per-feature input scales from the world: the mean displacement per step for dx, dy;
     the touch range for the contact distance; 1 for unit-range features (cos, sin, flag)
     and the turn per step's typical size (0.5 rad) for the heading change."""
     step = world.motion.mean_speed * world.motion.network_dt
-    scale = {"dx": step, "dy": step, "dhd": 0.5,
+    scale = {"dx": step, "dy": step, "dhd": TURN_SCALE,
              "contact_distance": world.sensors.touch_range}
     return tuple(float(scale.get(name, 1.0)) for name in FEATURES)

@@ -32,6 +32,7 @@ import math
 import numba
 import torch
 from torch import nn
+from torch.autograd.function import once_differentiable
 
 
 @numba.njit(fastmath=True, cache=True)
@@ -102,19 +103,26 @@ class _PeepholeLSTMFunction(torch.autograd.Function):
         return h_seq, h_seq[-1].clone(), cells[-1].clone()
 
     @staticmethod
+    @once_differentiable
     def backward(ctx, d_hidden, d_hn, d_cn):
         x, w_x, w_h, w_peep, gates, cells, tanh_cells, hidden = ctx.saved_tensors
         T, _, B, H = gates.shape
         F = x.shape[-1]
         # do = dh * a_o ; dc = dc_next + dh * b_c ; (di, df, dg) = dc * k ; dc_prev = dc * k_c
-        a_o = torch.empty_like(tanh_cells)
-        b_c = torch.empty_like(tanh_cells)
-        k_c = torch.empty_like(tanh_cells)
-        k = gates.new_empty(T, 3, B, H)
-        _derivative_factors(gates.detach().numpy(), cells.detach().numpy(),
-                            tanh_cells.detach().numpy(), w_peep.detach().numpy(),
-                            a_o.numpy(), b_c.numpy(), k.numpy(), k_c.numpy())
-
+        if gates.device.type == "cpu":
+            a_o = torch.empty_like(tanh_cells)
+            b_c = torch.empty_like(tanh_cells)
+            k_c = torch.empty_like(tanh_cells)
+            k = gates.new_empty(T, 3, B, H)
+            _derivative_factors(gates.detach().numpy(), cells.detach().numpy(),
+                                tanh_cells.detach().numpy(), w_peep.detach().numpy(),
+                                a_o.numpy(), b_c.numpy(), k.numpy(), k_c.numpy())
+        else:   # the same factors with torch ops (GPU)
+            i, f, g, o = gates.unbind(1)
+            a_o = tanh_cells * o * (1 - o)
+            b_c = o * (1 - tanh_cells * tanh_cells) + a_o * w_peep[2]
+            k = torch.stack([g * i * (1 - i), cells[:-1] * f * (1 - f), i * (1 - g * g)], 1)
+            k_c = f + k[:, 0] * w_peep[0] + k[:, 1] * w_peep[1]
         dh_all = torch.zeros_like(tanh_cells) if d_hidden is None else d_hidden.clone()
         if d_hn is not None:
             dh_all[-1] += d_hn
@@ -210,8 +218,8 @@ class PeepholeLSTM(nn.Module):
         h_seq : (T, B, H)
         (h_T, c_T) : final state
         """
-        if x.dim() != 3 or x.shape[-1] != self.input_size:
-            raise ValueError(f"`x` must have shape (T, B, {self.input_size}); "
+        if x.dim() != 3 or x.shape[-1] != self.input_size or x.shape[0] == 0:
+            raise ValueError(f"`x` must have shape (T >= 1, B, {self.input_size}); "
                              f"got {tuple(x.shape)}")
         B = x.shape[1]
         if state is None:
@@ -219,6 +227,10 @@ class PeepholeLSTM(nn.Module):
             c0 = x.new_zeros(B, self.hidden_size)
         else:
             h0, c0 = state
+            for name, v in (("h0", h0), ("c0", c0)):
+                if tuple(v.shape) != (B, self.hidden_size):
+                    raise ValueError(f"`state` {name} must have shape ({B}, "
+                                     f"{self.hidden_size}); got {tuple(v.shape)}")
         h_seq, h_n, c_n = _PeepholeLSTMFunction.apply(
             x, h0, c0, self.weight_x, self.weight_h, self.bias, self.weight_peephole)
         return h_seq, (h_n, c_n)

@@ -59,7 +59,7 @@ def run_network(network, batch, chunk: int = 250):
 
 
 def record(network, batch, *, baselines: dict | None = None, session_id: str | None = None,
-           checkpoint: str | None = None, chunk: int = 250):
+           checkpoint: str | None = None, config=None, chunk: int = 250):
     """Run ``network`` on ``batch`` and return its recording.
 
     Parameters
@@ -72,7 +72,10 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
         Arrays (T, B, ...) in the arena frame to add, named as in
         :data:`BASELINE_VARIABLES` (e.g. ``{"estimate_pf": ..., "pf_cov": ...}``).
     session_id, checkpoint : str, optional
-        Dataset attrs (defaults: ``"<task>-<split>-seed<seed>"`` and the network's task).
+        Dataset attrs (defaults: ``"<task>-<split>-seed<seed>"`` and the network's file).
+    config : TaskConfig, optional
+        The configuration the batch was made with, if not its task's default (e.g.
+        ``task_config("generalized", arenas="fixed", n_arenas=2)``).
 
     Returns
     -------
@@ -94,28 +97,41 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
     """
     h, xy, prob = run_network(network, batch, chunk)
     T, B, H = h.shape
-    task = task_config(batch.task)
-    estimate = xy + batch.start[None] if task.target == "start_relative" else xy
-    net_task = getattr(network, "task", None)
+    task = config or task_config(batch.task)
+    net_task = getattr(network, "task", None) or batch.task
+    # the readout speaks in the frame of the task the network was trained on
+    if task_config(net_task).target == "start_relative":
+        estimate = xy + batch.start[None]
+    else:
+        estimate = xy
+    net_file = (getattr(network, "info", None) or {}).get("file")
     rec = trial_layout(
         T, B, batch.dt, trial_id=batch.trial_index, environment=batch.environment,
         start_position=batch.start, task=batch.task, split=batch.split,
-        seed=int(batch.seed), network_task=str(net_task or batch.task),
-        checkpoint=str(checkpoint or net_task or "unknown"),
+        seed=int(batch.seed), network_task=str(net_task),
+        checkpoint=str(checkpoint or net_file or net_task),
         session_id=session_id or f"{batch.task}-{batch.split}-seed{batch.seed}",
-        subject=f"navigator-{net_task or batch.task}", species="artificial (peephole LSTM)")
+        subject=f"navigator-{net_task}", species="artificial (peephole LSTM)")
 
-    # environment table: every arena of the task (fixed arenas) or of the trials (novel)
-    if task.arenas == "fixed":
+    # environment table: the classifier's classes (all arenas of its task), else every
+    # arena of the batch's task (fixed arenas) or of its trials (novel arenas)
+    if prob is not None:
+        classes = task_config(net_task if task_config(net_task).classify else "specialized")
+        env_ids = np.arange(classes.n_arenas)
+        verts = np.asarray(fixed_arenas(classes.name, classes))
+    elif task.arenas == "fixed":
         env_ids = np.arange(task.n_arenas)
-        verts = np.asarray(fixed_arenas(batch.task))
+        verts = np.asarray(fixed_arenas(batch.task, task))
     else:
         env_ids, first = np.unique(batch.environment, return_index=True)
         verts = batch.arena_vertices[first]
     if prob is not None and prob.shape[-1] != len(env_ids):
-        raise ValueError(f"`network` classifies {prob.shape[-1]} arenas but task "
-                         f"{batch.task!r} has {len(env_ids)}; record it on the "
-                         f"specialized task")
+        raise ValueError(f"`network` classifies {prob.shape[-1]} arenas; expected "
+                         f"{len(env_ids)} (the specialized task's arenas)")
+    unknown = np.setdiff1d(batch.environment, env_ids)
+    if unknown.size:
+        raise ValueError(f"`batch` has arenas {unknown[:5].tolist()} outside the "
+                         f"environment table (ids 0..{len(env_ids) - 1})")
     rec = rec.assign_coords(environment_id=env_ids, unit=np.arange(H))
     step = np.linalg.norm(np.diff(np.concatenate([batch.start[None], batch.position]),
                                   axis=0), axis=-1)

@@ -21,10 +21,14 @@ def available() -> list:
 
 def resolve_network_file(name_or_path) -> Path:
     """A shipped network's file by name, or a path to a network/checkpoint file."""
+    candidate = HERE / f"{name_or_path}.pt"
+    if str(name_or_path) in NAMES and candidate.exists():
+        return candidate        # a shipped name wins over a same-named local folder
     path = Path(name_or_path)
+    if path.is_dir() and (path / "network.pt").exists():
+        return path / "network.pt"      # a training run's directory
     if path.suffix == ".pt" or path.exists():
         return path
-    candidate = HERE / f"{name_or_path}.pt"
     if not candidate.exists():
         raise ValueError(f"`name` must be one of the shipped networks {available()} or a "
                          f"path to a .pt file; got {name_or_path!r}")
@@ -45,12 +49,15 @@ def load_pretrained(name: str):
     from ..model.navigator import Navigator
     from ..training.checkpoint import load
 
-    obj = load(resolve_network_file(name))
+    path = resolve_network_file(name)
+    obj = load(path)
     config = obj["model_config"]
     if isinstance(config, dict):
         config = ModelConfig(**{**config, "input_scale": tuple(config["input_scale"])})
     net = Navigator(config)
     net.load_state_dict(obj.get("best_model") or obj["model"])
     net.task = obj.get("task")
-    net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test")}
+    net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test",
+                                        "steps_done", "finished", "base_network")}
+    net.info["file"] = str(path)
     return net.eval()

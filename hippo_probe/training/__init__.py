@@ -6,9 +6,9 @@ Attributes are imported lazily so that ``hippo-probe --help`` (which reads this 
 
 import importlib
 
-_ATTRS = {"TrainConfig": ".config", "build_network": ".fit", "class_weight_rule": ".fit",
-          "evaluate_network": ".fit", "fit": ".fit", "save_network": ".fit",
-          "summarize": ".fit", "export_network": ".export"}
+_ATTRS = {"TrainConfig": ".config", "build_network": ".trainer", "class_weight_rule": ".trainer",
+          "evaluate_network": ".trainer", "fit": ".trainer", "save_network": ".trainer",
+          "summarize": ".trainer", "export_network": ".export"}
 __all__ = sorted(_ATTRS)
 
 

@@ -47,7 +47,7 @@ def _train(a):
     import json
 
     from .config import TrainConfig
-    from .fit import fit
+    from .trainer import fit
 
     config = TrainConfig(task=a.task, n_trials=a.trials, steps=a.steps,
                          batch_size=a.batch_size, lr=a.lr, lr_final=a.lr_final,
@@ -66,12 +66,17 @@ def _evaluate(a):
 
     from ..pretrained import load_pretrained
     from ..tasks import make_trials
-    from .fit import evaluate_network, summarize
+    from .trainer import evaluate_network, summarize
+
+    from ..tasks import task_config
 
     net = load_pretrained(a.checkpoint)
     task = a.task or net.task
     batch = make_trials(task, a.trials, a.split, a.seed)
     weight = (net.info.get("class_weight") or 0.0)
-    metrics = summarize(evaluate_network(net, batch, weight), batch.dt)
+    # score the readout in the frame of the task the network was trained on
+    start_relative = task_config(net.task).target == "start_relative"
+    target = batch.position - batch.start[None] if start_relative else batch.position
+    metrics = summarize(evaluate_network(net, batch, weight, target=target), batch.dt)
     print(json.dumps({"network": str(a.checkpoint), "task": task, "split": a.split,
                       "trials": a.trials, **metrics}, indent=1))

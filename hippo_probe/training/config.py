@@ -50,7 +50,10 @@ class TrainConfig:
         Checkpoint or pretrained name whose parameters initialise the network.
     train_only : str or None
         "classifier": freeze everything else and train the arena readout alone on
-        cross-entropy (readout retraining, the study's Fig. 3F).
+        cross-entropy (readout retraining, the study's Fig. 3F; task must be
+        "specialized").
+    device : str
+        "cpu" (default) or "cuda".
     """
 
     task: str = "generalized"
@@ -71,6 +74,10 @@ class TrainConfig:
     class_weight: float | None = None
     init_from: str | None = None
     train_only: str | None = None
+    device: str = "cpu"
+
+    #: fields that do not change the trained parameters (may differ on resume)
+    RESUMABLE_CHANGES = ("threads", "checkpoint_minutes", "n_test")
 
     def __post_init__(self):
         check_option("task", self.task, TASKS)
@@ -85,6 +92,24 @@ class TrainConfig:
             check_number("class_weight", self.class_weight, low=0, low_inclusive=True)
         if self.train_only is not None:
             check_option("train_only", self.train_only, ("classifier",))
+            if self.task != "specialized":
+                raise ValueError(f"`train_only`='classifier' retrains the arena readout on "
+                                 f"the specialized task; got task={self.task!r}")
+            if self.init_from is None:
+                raise ValueError("`train_only`='classifier' needs `init_from` (the network "
+                                 "whose readout to retrain); got None")
+            if self.class_weight is not None:
+                raise ValueError(f"`class_weight` has no role when only the classifier is "
+                                 f"trained (its loss is the cross-entropy); got "
+                                 f"{self.class_weight}")
+        check_option("device", self.device, ("cpu", "cuda"))
+
+    def differences(self, other: "TrainConfig") -> dict:
+        """Fields that differ and matter for the result: name -> (self, other)."""
+        return {f.name: (getattr(self, f.name), getattr(other, f.name))
+                for f in dataclasses.fields(self)
+                if f.name not in self.RESUMABLE_CHANGES
+                and getattr(self, f.name) != getattr(other, f.name)}
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)

@@ -40,7 +40,8 @@ def export_network(run_dir, name: str, dest=None) -> list:
     network = {"model": state, "model_config": _jsonable(ckpt["model_config"]),
                "task": ckpt["task"],
                "config": ckpt["config"], "class_weight": log.get("class_weight"),
-               "test": log.get("test"), "steps_done": ckpt["step"], "finished": finished}
+               "test": log.get("test"), "steps_done": ckpt["step"], "finished": finished,
+               "base_network": log.get("base_network")}
     pt = dest / f"{name}.pt"
     save_atomic(network, pt)
     log.update(steps_done=ckpt["step"], finished=finished,

@@ -57,3 +57,36 @@ def test_record_rejects_bad_baselines(specialized_batch):
         hp.record(net, specialized_batch, baselines={"estimate_xyz": np.zeros((500, 3, 2))})
     with pytest.raises(ValueError, match=r"must have shape \(500, 3"):
         hp.record(net, specialized_batch, baselines={"estimate_pf": np.zeros((10, 3, 2))})
+
+
+def test_record_uses_the_frame_of_the_networks_own_task():
+    """A localization network (arena-frame readout) recorded on generalized trials must
+    not get the start added; a generalized network (start-relative readout) recorded on
+    localization trials must."""
+    net = Navigator(ModelConfig(hidden_size=4))
+    gen = hp.tasks.make_trials("generalized", 2, "test", 0)
+    xy, _, _ = net(torch.from_numpy(gen.inputs))
+    net.task = "localization"
+    rec = hp.record(net, gen)
+    np.testing.assert_allclose(rec.estimate.values[:500], xy[:, 0].detach().numpy(),
+                               atol=1e-5)
+    loc = hp.tasks.make_trials("localization", 2, "test", 0)
+    xy, _, _ = net(torch.from_numpy(loc.inputs))
+    net.task = "generalized"
+    rec = hp.record(net, loc)
+    np.testing.assert_allclose(rec.estimate.values[:500],
+                               xy[:, 0].detach().numpy() + loc.start[0], atol=1e-5)
+
+
+def test_baselines_from_dataset_matches_trials(tmp_path):
+    from hippo_probe.baselines.results import run_baselines
+    from hippo_probe.model.record import baselines_from_dataset
+    batch = hp.tasks.make_trials("generalized", 2, "test", 0)
+    ds = run_baselines(batch, n_particles=50)
+    arrays = baselines_from_dataset(ds, batch)
+    assert arrays["estimate_pf"].shape == (500, 2, 2)
+    # estimates are in the arena frame: PI from the true start is close early on
+    assert np.abs(arrays["estimate_pi"][0] - batch.position[0]).max() < 0.05
+    other = hp.tasks.make_trials("generalized", 2, "test", 1)
+    with pytest.raises(ValueError, match="other trials"):
+        baselines_from_dataset(ds, other)

@@ -63,8 +63,11 @@ def test_resume_after_interruption_gives_identical_parameters(uninterrupted, tmp
     log = fit(config, tmp_path / "run", cache_dir=d / "cache", progress=False)
     assert log["resumed_at"] == [4]
     _assert_same(_params(tmp_path / "run" / "network.pt"), _params(d / "run" / "network.pt"))
+    # the checkpoint keeps the LAST parameters: they too must be identical
     _assert_same(_params(tmp_path / "run" / "checkpoint.pt"),
                  _params(d / "run" / "checkpoint.pt"))
+    ref = json.loads((d / "run" / "log.json").read_text())
+    assert [e["loss"] for e in log["train"]] == [e["loss"] for e in ref["train"]]
 
 
 def test_kill_and_resume(uninterrupted, tmp_path):
@@ -92,20 +95,59 @@ def test_kill_and_resume(uninterrupted, tmp_path):
     proc.wait()
     killed_at = torch.load(ckpt, weights_only=False)["step"]
     assert 3 <= killed_at < 12
-    assert not list(run.glob(".*.tmp")) or True   # a stray temp file is harmless
     cfg = TrainConfig(**dict(TINY, steps=12, checkpoint_minutes=1e-9))
     log = fit(cfg, run, cache_dir=d / "cache", progress=False)
     assert log["resumed_at"][0] == killed_at
     reference = fit(cfg, tmp_path / "ref", cache_dir=d / "cache", progress=False)
     _assert_same(_params(run / "network.pt"), _params(tmp_path / "ref" / "network.pt"))
+    _assert_same(_params(run / "checkpoint.pt"), _params(tmp_path / "ref" / "checkpoint.pt"))
     assert reference["test"] == log["test"]
+    assert [e["loss"] for e in log["train"]] == [e["loss"] for e in reference["train"]]
 
 
 def test_resume_refuses_another_configuration(uninterrupted):
     d, _ = uninterrupted
-    with pytest.raises(ValueError, match="another configuration"):
+    with pytest.raises(ValueError, match=r"another configuration \(lr: checkpoint 0.001"):
         fit(TrainConfig(**dict(TINY, lr=0.5)), d / "run", cache_dir=d / "cache",
             progress=False)
+
+
+def test_training_moves_the_parameters(uninterrupted):
+    d, log = uninterrupted
+    ckpt = torch.load(d / "run" / "checkpoint.pt", weights_only=False)
+    torch.manual_seed(TINY.get("init_seed", 0))
+    from hippo_probe.training import build_network
+    init = build_network(TrainConfig(**TINY)).state_dict()
+    moved = max((ckpt["model"][k] - init[k]).abs().max().item() for k in init)
+    assert moved > 1e-4
+
+
+def test_export_and_readout_retraining(uninterrupted, tmp_path):
+    d, _ = uninterrupted
+    from hippo_probe.training import export_network
+    pt, js = export_network(d / "run", "tiny_spec", dest=tmp_path)
+    net = hp.load_pretrained(pt)
+    assert net.info["finished"] and net.info["steps_done"] == TINY["steps"]
+    assert json.loads(js.read_text())["steps_done"] == TINY["steps"]
+    # readout retraining: only the classifier changes
+    cfg = TrainConfig(**dict(TINY, init_from=str(pt), train_only="classifier", steps=2))
+    fit(cfg, tmp_path / "readout", cache_dir=d / "cache", progress=False)
+    new = torch.load(tmp_path / "readout" / "checkpoint.pt", weights_only=False)["model"]
+    old = torch.load(pt, weights_only=False)["model"]
+    for k in old:
+        if k.startswith("classifier."):
+            assert not torch.equal(new[k], old[k])
+        else:
+            torch.testing.assert_close(new[k], old[k], rtol=0, atol=0)
+    log = json.loads((tmp_path / "readout" / "log.json").read_text())
+    assert log["base_network"]["file"] == str(pt) and log["class_weight"] == 1.0
+
+
+def test_readout_retraining_needs_the_specialized_task():
+    with pytest.raises(ValueError, match="specialized task"):
+        TrainConfig(task="generalized", train_only="classifier", init_from="x")
+    with pytest.raises(ValueError, match="needs `init_from`"):
+        TrainConfig(task="specialized", train_only="classifier")
 
 
 def test_training_order_is_a_function_of_the_step_only():

@@ -51,29 +51,51 @@ def build_network(config: TrainConfig) -> Navigator:
                                input_scale=input_scale_for(task.world))
     torch.manual_seed(config.init_seed)
     net = Navigator(model_config)
+    net.base_network = None
     if config.init_from:
         from ..pretrained import resolve_network_file
-        state = load(resolve_network_file(config.init_from))["model"]
+        path = resolve_network_file(config.init_from)
+        obj = load(path)
+        state = obj.get("best_model") or obj["model"]
         own = net.state_dict()
-        missing = [k for k in own if k not in state]
-        own.update({k: v for k, v in state.items() if k in own and v.shape == own[k].shape})
+        wrong = {k: (tuple(v.shape), tuple(own[k].shape)) for k, v in state.items()
+                 if k in own and v.shape != own[k].shape}
+        if wrong:
+            raise ValueError(f"`init_from` {config.init_from!r} has parameters of other "
+                             f"shapes (got, expected): {wrong}")
+        # a retrained readout starts fresh; every other parameter must come from the file
+        fresh = ("classifier.",) if config.train_only == "classifier" else ()
+        missing = [k for k in own if k not in state and not k.startswith(fresh)]
+        if missing:
+            raise ValueError(f"`init_from` {config.init_from!r} lacks parameters {missing}")
+        own.update({k: v for k, v in state.items()
+                    if k in own and not k.startswith(fresh)})
         net.load_state_dict(own)
-        if config.train_only != "classifier" and missing:
-            raise ValueError(f"`init_from` lacks parameters {missing}")
+        net.base_network = {"file": str(path), "sha1": _sha1(path),
+                            "steps_done": obj.get("steps_done", obj.get("step")),
+                            "finished": obj.get("finished")}
     if config.train_only == "classifier":
         for name, p in net.named_parameters():
             p.requires_grad_(name.startswith("classifier."))
     return net
 
 
-def losses(net, inputs, target, environment, class_weight, *, classifier_only=False):
+def _sha1(path) -> str:
+    import hashlib
+    return hashlib.sha1(Path(path).read_bytes()).hexdigest()
+
+
+def losses(net, inputs, target, environment, class_weight, *, classifier_only=False,
+           classify=True):
     """(total, mse, ce, xy, logits) on one batch of numpy arrays."""
     xy, logits, _ = net(torch.from_numpy(inputs))
-    target = torch.from_numpy(np.asarray(target, dtype=np.float32))
+    target = torch.from_numpy(np.asarray(target, dtype=np.float32)).to(xy.device)
     mse = ((xy - target) ** 2).mean()
-    ce = torch.zeros(())
+    ce = torch.zeros((), device=xy.device)
+    if not classify:
+        logits = None
     if logits is not None:
-        labels = torch.from_numpy(np.asarray(environment)).long()
+        labels = torch.from_numpy(np.asarray(environment)).long().to(xy.device)
         ce = F.cross_entropy(logits.reshape(-1, logits.shape[-1]),
                              labels.repeat(logits.shape[0]))
     total = class_weight * ce if classifier_only else mse + class_weight * ce
@@ -81,34 +103,43 @@ def losses(net, inputs, target, environment, class_weight, *, classifier_only=Fa
 
 
 @torch.no_grad()
-def evaluate_network(net, batch, class_weight: float = 0.0, chunk: int = 250) -> dict:
+def evaluate_network(net, batch, class_weight: float = 0.0, chunk: int = 250, *,
+                     target=None) -> dict:
     """Errors of ``net`` on a TrialBatch: per-step curves and summaries.
+
+    ``target`` (T, B, 2) defaults to ``batch.target``; pass the batch's positions in the
+    network's own frame to evaluate it on another task's trials. Classification is scored
+    only on trials of the specialized task (whose arena ids are the classes).
 
     Returns a dict with ``error_m`` (T,) mean Euclidean error vs time, ``accuracy`` (T,)
     (if the network classifies), overall means and the loss.
     """
+    target = batch.target if target is None else target
+    classify = net.classifier is not None and batch.task == "specialized"
     net.eval()
     err_sum = np.zeros(batch.n_steps)
     acc_sum = np.zeros(batch.n_steps)
     mse_sum = ce_sum = 0.0
     for lo in range(0, len(batch), chunk):
         sl = slice(lo, lo + chunk)
-        _, mse, ce, xy, logits = losses(net, batch.inputs[:, sl], batch.target[:, sl],
-                                        batch.environment[sl], class_weight)
+        _, mse, ce, xy, logits = losses(net, batch.inputs[:, sl], target[:, sl],
+                                        batch.environment[sl], class_weight,
+                                        classify=classify)
         n = xy.shape[1]
         mse_sum += float(mse) * n
         ce_sum += float(ce) * n
-        err = torch.linalg.norm(xy - torch.from_numpy(batch.target[:, sl]).float(), dim=-1)
+        truth = torch.from_numpy(np.asarray(target[:, sl], dtype=np.float32))
+        err = torch.linalg.norm(xy.cpu() - truth, dim=-1)
         err_sum += err.sum(1).numpy()
         if logits is not None:
-            hit = logits.argmax(-1) == torch.from_numpy(batch.environment[sl])
+            hit = logits.argmax(-1).cpu() == torch.from_numpy(batch.environment[sl])
             acc_sum += hit.float().sum(1).numpy()
     net.train()
     n = len(batch)
     out = {"error_m": err_sum / n, "mean_error_m": float(err_sum.sum() / n / batch.n_steps),
            "mse": mse_sum / n, "ce": ce_sum / n,
            "loss": mse_sum / n + class_weight * ce_sum / n}
-    if net.classifier is not None:
+    if classify:
         out["accuracy"] = acc_sum / n
         out["mean_accuracy"] = float(acc_sum.sum() / n / batch.n_steps)
     return out
@@ -119,6 +150,8 @@ def summarize(metrics: dict, dt: float, times=(50.0, 100.0, 200.0)) -> dict:
     out = {k: v for k, v in metrics.items() if not isinstance(v, np.ndarray)}
     for t in times:
         k = int(round(t / dt)) - 1
+        if not 0 <= k < len(metrics["error_m"]):
+            continue
         out[f"error_{int(t)}s_m"] = float(metrics["error_m"][k])
         if "accuracy" in metrics:
             out[f"accuracy_{int(t)}s"] = float(metrics["accuracy"][k])
@@ -130,14 +163,14 @@ def _lr_at(config: TrainConfig, step: int) -> float:
     return config.lr_final + 0.5 * (config.lr - config.lr_final) * (1 + math.cos(math.pi * frac))
 
 
-def _distributed():
+def _distributed(device: str = "cpu"):
     """(rank, world_size), initialising the process group under torchrun."""
     world = int(os.environ.get("WORLD_SIZE", "1"))
     if world <= 1:
         return 0, 1
     import torch.distributed as dist
     if not dist.is_initialized():
-        dist.init_process_group("nccl" if torch.cuda.is_available() else "gloo")
+        dist.init_process_group("nccl" if device == "cuda" else "gloo")
     return dist.get_rank(), world
 
 
@@ -161,49 +194,64 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
         Stop (with a checkpoint) after this many optimizer steps of *this* call — to
         simulate an interruption in tests.
     """
-    rank, world = _distributed()
+    rank, world = _distributed(config.device)
+    threads_before = torch.get_num_threads()
     torch.set_num_threads(config.threads)
     try:
         import numba
         numba.set_num_threads(min(config.threads, numba.config.NUMBA_NUM_THREADS))
     except Exception:  # numba threading layer not initialisable: serial is fine
         pass
-    run_dir = Path(run_dir)
+    try:
+        return _fit(config, Path(run_dir), rank, world, progress, cache_dir, stop_after)
+    finally:
+        torch.set_num_threads(threads_before)   # don't leave a Jupyter kernel pinned
+
+
+def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
     run_dir.mkdir(parents=True, exist_ok=True)
     task = task_config(config.task)
     n_trials = config.n_trials or task.train_trials
     if config.batch_size % world:
         raise ValueError(f"`batch_size` must be divisible by the world size ({world}); "
                          f"got {config.batch_size}")
-
-    net = build_network(config)
+    device = torch.device(config.device)
+    net = build_network(config).to(device)
     params = [p for p in net.parameters() if p.requires_grad]
     opt = torch.optim.Adam(params, lr=config.lr)
-    validation = make_trials(config.task, config.n_validation, "validation", config.seed)
+    validation = make_trials(config.task, config.n_validation, "validation", config.seed) \
+        if rank == 0 else None
     classify = net.classifier is not None
-    if config.class_weight is not None:
+    classifier_only = config.train_only == "classifier"
+    if classifier_only:
+        class_weight = 1.0            # the loss is the cross-entropy alone
+    elif config.class_weight is not None:
         class_weight = config.class_weight
     elif classify:
-        class_weight = class_weight_rule(float(np.mean(validation.target ** 2)),
+        target_var = make_trials(config.task, config.n_validation, "validation",
+                                 config.seed).target if validation is None else \
+            validation.target
+        class_weight = class_weight_rule(float(np.mean(target_var ** 2)),
                                          net.config.n_classes)
     else:
         class_weight = 0.0
-    classifier_only = config.train_only == "classifier"
-    if classifier_only:
-        class_weight = 1.0
 
     ckpt_path = run_dir / "checkpoint.pt"
     log = {"config": config.to_dict(), "n_trials": n_trials, "class_weight": class_weight,
            "model_config": vars(net.config) | {"input_scale": list(net.config.input_scale)},
+           "base_network": net.base_network,
            "package_version": __version__, "torch_version": torch.__version__,
            "command": " ".join(sys.argv), "world_size": world, "train": [],
            "validation": [], "wall_time_s": 0.0}
     step, best_loss, best_state = 0, math.inf, None
     if ckpt_path.exists():
         ckpt = load(ckpt_path)
-        if TrainConfig.from_dict(ckpt["config"]) != config:
+        diff = TrainConfig.from_dict(ckpt["config"]).differences(config)
+        if diff:
+            listed = "; ".join(f"{k}: checkpoint {a!r}, got {b!r}" for k, a, b in
+                               ((k, *v) for k, v in diff.items()))
             raise ValueError(f"`run_dir` {str(run_dir)!r} holds a checkpoint of another "
-                             f"configuration; use a new directory")
+                             f"configuration ({listed}); use a new directory")
         net.load_state_dict(ckpt["model"])
         opt.load_state_dict(ckpt["optimizer"])
         step, best_loss, best_state = ckpt["step"], ckpt["best_loss"], ckpt["best_model"]
@@ -216,10 +264,11 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
     data = TrainingTrials(config.task, n_trials, config.batch_size, seed=config.seed,
                           init_seed=config.init_seed, cache_dir=cache_dir)
 
-    def checkpoint():
+    def checkpoint(model_state=None):
         if rank == 0:
-            save_atomic({"model": net.state_dict(), "optimizer": opt.state_dict(),
-                         "step": step, "best_loss": best_loss, "best_model": best_state,
+            save_atomic({"model": model_state or net.state_dict(),
+                         "optimizer": opt.state_dict(), "step": step,
+                         "best_loss": best_loss, "best_model": best_state,
                          "config": config.to_dict(), "model_config": net.config,
                          "task": config.task, "log": log}, ckpt_path)
 
@@ -228,12 +277,12 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
         m = evaluate_network(net, validation, class_weight)
         entry = {"step": step, "loss": m["loss"], "mean_error_m": m["mean_error_m"],
                  "mse": m["mse"], "ce": m["ce"]}
-        if classify:
+        if "mean_accuracy" in m:
             entry["mean_accuracy"] = m["mean_accuracy"]
         log["validation"].append(entry)
         if m["loss"] < best_loss:
             best_loss = m["loss"]
-            best_state = {k: v.detach().clone() for k, v in net.state_dict().items()}
+            best_state = {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}
         return entry
 
     t_start, t_ckpt = time.time(), time.time()
@@ -242,48 +291,58 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
                desc=f"train {config.task}", unit="step", dynamic_ncols=True)
     last_val = log["validation"][-1] if log["validation"] else None
     done_here = 0
-    while step < config.steps:
-        if step % config.validate_every == 0 and (not log["validation"] or
-                                                  log["validation"][-1]["step"] != step):
-            if rank == 0:
-                last_val = validate()
-        idx = data.indices(step)
-        per_rank = config.batch_size // world
-        idx = idx[rank * per_rank:(rank + 1) * per_rank]
-        inputs, target, env = data.batch(idx)
-        for group in opt.param_groups:
-            group["lr"] = _lr_at(config, step)
-        total, mse, ce, _, _ = losses(train_net, inputs, target, env, class_weight,
-                                      classifier_only=classifier_only)
-        opt.zero_grad(set_to_none=True)
-        total.backward()
-        grad_norm = torch.nn.utils.clip_grad_norm_(params, config.clip_norm)
-        opt.step()
-        step += 1
-        done_here += 1
-        log["wall_time_s"] = wall0 + time.time() - t_start
-        log["train"].append({"step": step, "loss": total.item(), "mse": mse.item(),
-                             "ce": ce.item(), "grad_norm": grad_norm.item(),
-                             "lr": opt.param_groups[0]["lr"],
-                             "time_s": round(log["wall_time_s"], 2)})
-        post = {"loss": f"{log['train'][-1]['loss']:.4g}"}
-        if last_val:
-            post["val_err_m"] = f"{last_val['mean_error_m']:.3f}"
-            if "mean_accuracy" in last_val:
-                post["val_acc"] = f"{last_val['mean_accuracy']:.2f}"
-        bar.set_postfix(post, refresh=False)
-        bar.update(1)
-        if time.time() - t_ckpt > 60 * config.checkpoint_minutes:
-            checkpoint()
-            t_ckpt = time.time()
-        if stop_after is not None and done_here >= stop_after and step < config.steps:
-            checkpoint()
-            bar.close()
-            return log
-    bar.close()
+    try:
+        while step < config.steps:
+            if step % config.validate_every == 0 and (not log["validation"] or
+                                                      log["validation"][-1]["step"] != step):
+                if rank == 0:
+                    last_val = validate()
+            idx = data.indices(step)
+            per_rank = config.batch_size // world
+            idx = idx[rank * per_rank:(rank + 1) * per_rank]
+            inputs, target, env = data.batch(idx)
+            for group in opt.param_groups:
+                group["lr"] = _lr_at(config, step)
+            total, mse, ce, _, _ = losses(train_net, inputs, target, env, class_weight,
+                                          classifier_only=classifier_only)
+            opt.zero_grad(set_to_none=True)
+            total.backward()
+            grad_norm = torch.nn.utils.clip_grad_norm_(params, config.clip_norm)
+            opt.step()
+            step += 1
+            done_here += 1
+            values = torch.stack([total.detach(), mse.detach(), ce.detach()])
+            if world > 1:             # log the global batch's loss, not rank 0's half
+                torch.distributed.all_reduce(values)
+                values /= world
+            log["wall_time_s"] = wall0 + time.time() - t_start
+            loss_v, mse_v, ce_v = values.tolist()
+            log["train"].append({"step": step, "loss": loss_v, "mse": mse_v, "ce": ce_v,
+                                 "grad_norm": grad_norm.item(),
+                                 "lr": opt.param_groups[0]["lr"],
+                                 "time_s": round(log["wall_time_s"], 2)})
+            post = {"loss": f"{loss_v:.4g}"}
+            if last_val:
+                post["val_err_m"] = f"{last_val['mean_error_m']:.3f}"
+                if "mean_accuracy" in last_val:
+                    post["val_acc"] = f"{last_val['mean_accuracy']:.2f}"
+            bar.set_postfix(post, refresh=False)
+            bar.update(1)
+            if time.time() - t_ckpt > 60 * config.checkpoint_minutes:
+                checkpoint()
+                t_ckpt = time.time()
+            if stop_after is not None and done_here >= stop_after and step < config.steps:
+                checkpoint()
+                return log
+    except KeyboardInterrupt:
+        checkpoint()                  # Ctrl-C in Jupyter loses no work
+        raise
+    finally:
+        bar.close()
     if rank == 0:
         if not log["validation"] or log["validation"][-1]["step"] != step:
             validate()
+        last_state = {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}
         net.load_state_dict(best_state)
         test = make_trials(config.task, config.n_test, "test", config.seed)
         metrics = evaluate_network(net, test, class_weight)
@@ -291,7 +350,7 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
         log["test_curves"] = {k: v.tolist() for k, v in metrics.items()
                               if isinstance(v, np.ndarray)}
         log["best_validation_loss"] = best_loss
-        checkpoint()
+        checkpoint(last_state)        # the checkpoint keeps the last parameters
         save_network(net, config, log, run_dir / "network.pt")
         with open(run_dir / "log.json", "w") as f:
             json.dump(log, f, indent=1)
@@ -302,6 +361,7 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
 
 def save_network(net, config: TrainConfig, log: dict, path) -> None:
     """Save a trained network (parameters, architecture, task) for ``load_pretrained``."""
-    save_atomic({"model": net.state_dict(), "model_config": net.config,
-                 "task": config.task, "config": config.to_dict(),
-                 "class_weight": log.get("class_weight"), "test": log.get("test")}, path)
+    save_atomic({"model": {k: v.detach().cpu() for k, v in net.state_dict().items()},
+                 "model_config": net.config, "task": config.task,
+                 "config": config.to_dict(), "class_weight": log.get("class_weight"),
+                 "test": log.get("test"), "base_network": log.get("base_network")}, path)

@@ -193,7 +193,7 @@ def in_memory(args):
         rel = np.abs(info.information.values / p_mi["bits/spike"].values - 1).max()
         clip = np.nanmedian(np.asarray(o_info) / info.information.values - 1)
         print(f"agreement: min map correlation with pynapple {corr:.6f}, max relative "
-              f"information difference {rel:.2e} (pynapple's rate = spikes / duration); "
+              f"information difference {rel:.2e}; "
               f"opexebo's information is {100 * clip:+.1f}% (median) — it clips bins "
               "below the mean rate")
     print(f"\n{'contender':<62}{'seconds':>10}{'/ hippo_probe 1 thread':>24}")

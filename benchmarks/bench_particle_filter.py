@@ -5,8 +5,9 @@ Speed is in particle-steps per second (trials x 500 steps x particles / wall tim
 best run is the closest to the code's own speed), with the CPU time of all threads beside
 it; the time of the issue's full runs (1,000 test trials) is extrapolated linearly in
 trials (trials are independent; ``--trials 1000`` measures it outright), and as it would
-take on idle cores (CPU time / threads: "idle"). Peak memory is the growth of the highest resident set size of a fresh process while it filters
-``--trials`` trials (it counts numba's allocations, which tracemalloc does not see).
+take on idle cores (CPU time / threads: "idle"). Peak memory is the growth of the highest
+resident set size of a fresh process while it filters ``--trials`` trials (it counts
+numba's allocations, which tracemalloc does not see).
 
 Targets (issue 6): PF, 1,000 particles, 1,000 trials x 500 steps in under 60 s; PF-SLAM,
 10,000 particles, the same trials in under 10 minutes: about 8.3 million particle-steps

@@ -46,6 +46,7 @@ _LAZY_ATTRS = {
     "correlation_dimension": "hippo_probe.analysis",
     "localization_error": "hippo_probe.analysis",
     "classification_accuracy": "hippo_probe.analysis",
+    "AnalysisWarning": "hippo_probe.analysis",
     # torch-backed
     "record": "hippo_probe.model",
     "load_pretrained": "hippo_probe.pretrained",

@@ -1,6 +1,5 @@
 """``hippo-probe main`` (the README's main job) and ``hippo-probe figures``."""
 
-import importlib.util
 import time
 from pathlib import Path
 
@@ -23,20 +22,18 @@ def add_commands(sub):
 
 
 def _load(name):
-    path = ROOT / "paper_figures" / f"{name}.py"
-    if not path.exists():
-        raise FileNotFoundError(f"{path} not found: `hippo-probe figures` runs from a clone "
-                                f"of the repository (the scripts are not package data)")
-    spec = importlib.util.spec_from_file_location(f"paper_figures.{name}", path,
-                                                  submodule_search_locations=None)
-    module = importlib.util.module_from_spec(spec)
+    """Import a script of paper_figures/ (by its file name) as a module."""
+    import importlib
     import sys
-    sys.path.insert(0, str(path.parent))
-    try:
-        spec.loader.exec_module(module)
-    finally:
-        sys.path.remove(str(path.parent))
-    return module
+
+    folder = ROOT / "paper_figures"
+    if not (folder / f"{name}.py").exists():
+        raise FileNotFoundError(f"{folder / name}.py not found: `hippo-probe figures` runs "
+                                f"from a clone of the repository (the figure scripts are "
+                                f"not package data)")
+    if str(folder) not in sys.path:
+        sys.path.insert(0, str(folder))
+    return importlib.import_module(name)
 
 
 def _figures(args):

@@ -55,7 +55,7 @@ CONFIGS = {
     "full": FigureConfig(),
     "tiny": FigureConfig(name="tiny", trials=4, particles=50, slam_particles=(100, 200),
                          slam_trials=2, map_trials=6, remap_trials=12,
-                         dimension_samples=300),
+                         dimension_samples=1500),
     "paper": FigureConfig(name="paper", trials=1000, slam_trials=100, map_trials=100,
                           remap_trials=1000, dimension_samples=10000),
 }

@@ -78,6 +78,14 @@ class ParticleFilterConfig:
         0.5: systematic resampling when the effective sample size
         ``1 / sum(w_i^2)`` falls below half the particle count, the usual rule (Doucet &
         Johansen 2009, "A tutorial on particle filtering and smoothing", sec. 3.5).
+    arena_floor : float
+        0.1: PF-SLAM resamples arena by arena and keeps at least this fraction of its
+        initial share (10 of the 100 particles per arena at 10,000 particles) for every
+        arena whose posterior is not exactly zero, each such particle carrying its
+        arena's mass divided among them (the posterior is unchanged). Plain systematic
+        resampling lost the true arena for good in 33 of 1,000 test trials, within the
+        first 30 s, while its probability was still ~1% (too few of its particles drew
+        the right position); afterwards the filter was certain of a wrong arena.
     intermediate_checks : int
         1: besides the step's end, the absence of contact is also checked at its midpoint
         (on the chord from start to end, heading turned back by half the sensed turn).
@@ -89,12 +97,14 @@ class ParticleFilterConfig:
     n_particles: int = 1000
     slam_particles: int = 10_000
     resample_threshold: float = 0.5
+    arena_floor: float = 0.1
     intermediate_checks: int = 1
 
     def __post_init__(self):
         check_positive("n_particles", self.n_particles, integer=True)
         check_positive("slam_particles", self.slam_particles, integer=True)
         check_number("resample_threshold", self.resample_threshold, low=0, high=1)
+        check_number("arena_floor", self.arena_floor, low=0, low_inclusive=True, high=1)
         check_number("intermediate_checks", self.intermediate_checks, low=0,
                      low_inclusive=True, integer=True)
 

@@ -173,6 +173,7 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
     counts = np.zeros((n_trials, 2), np.int64)
     arena = (np.arange(n_particles) * n_arenas // n_particles).astype(np.int64)
     clearance = config.world.sensors.touch_range
+    floor = int(pf.arena_floor * n_particles / n_arenas) if n_arenas > 1 else 0
 
     def one(b):
         rng = np.random.default_rng(np.random.SeedSequence(
@@ -188,7 +189,7 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
             obs.angle[b], obs.path_length[b], pf.intermediate_checks, noise.speed_sd,
             noise.rotation_sd, pf.resample_threshold, model.kernel_args(), model.heading_sd,
             model.touch_range, model.min_clearance, model.outlier_probability,
-            model.outlier_density, relative, class_output, snapshot_of_step, estimate[b], mean[b], cov[b], classes[b],
+            model.outlier_density, floor, relative, class_output, snapshot_of_step, estimate[b], mean[b], cov[b], classes[b],
             snap_xy[b], snap_w[b], snap_arena[b])
 
     if threads == 1 or n_trials == 1:
@@ -260,7 +261,7 @@ def _nearest_walls(walls, x, y, best, nearest, crossings):
 def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact, distance,
                   angle, path_length, n_checks, speed_sd, rotation_sd, resample_threshold,
                   contact_args, heading_sd, touch_range, min_clearance, outlier_p,
-                  outlier_density, relative, class_output,
+                  outlier_density, floor, relative, class_output,
                   snapshot_of_step, out_estimate, out_mean, out_cov, out_class, snap_xy,
                   snap_w, snap_arena):
     """One trial of the particle filter (module docstring, steps 1-4). Particles (``x, y``,
@@ -278,6 +279,8 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
                                                    np.empty(n), np.empty(n))
     x2, y2, sx2, sy2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     arena2 = np.empty(n, dtype=arena.dtype)
+    w2 = np.empty(n)
+    alloc = np.empty(n_arenas, dtype=np.int64)
     per_wall = np.empty((n_arenas, n_walls))
     reach, sd = np.empty((n_arenas, n_walls)), np.empty((n_arenas, n_walls))
     mass = np.empty(n_arenas)
@@ -395,25 +398,58 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
                 snap_xy[k, i, 0], snap_xy[k, i, 1] = x[i], y[i]
                 snap_w[k, i] = w[i]
                 snap_arena[k, i] = arena[i]
-        # 4. systematic resampling (keeps the particles sorted by arena)
+        # 4. resampling, arena by arena (keeps the particles sorted by arena)
         if 1.0 / sum_w2 < resample_threshold * n:
             n_resampled += 1
-            u0 = rng.random() / n
-            cum = w[0]
-            j = 0
-            for i in range(n):
-                target = u0 + i / n
-                while target > cum and j < n - 1:
-                    j += 1
-                    cum += w[j]
-                x2[i], y2[i], sx2[i], sy2[i], arena2[i] = x[j], y[j], sx[j], sy[j], arena[j]
+            _allocate(mass, n, floor, rng.random(), alloc)
+            out = 0
+            for a in range(n_arenas):
+                k = alloc[a]
+                if k == 0:
+                    continue
+                lo, hi = block[a], block[a + 1]
+                u0 = rng.random() / k
+                cum = w[lo] / mass[a]
+                j = lo
+                for i in range(k):                 # systematic within the arena
+                    target = u0 + i / k
+                    while target > cum and j < hi - 1:
+                        j += 1
+                        cum += w[j] / mass[a]
+                    x2[out], y2[out], sx2[out], sy2[out] = x[j], y[j], sx[j], sy[j]
+                    arena2[out] = a
+                    w2[out] = mass[a] / k
+                    out += 1
             x, x2 = x2, x
             y, y2 = y2, y
             sx, sx2 = sx2, sx
             sy, sy2 = sy2, sy
             arena, arena2 = arena2, arena
-            w[:] = 1.0 / n
+            w, w2 = w2, w
     return n_skipped, n_resampled
+
+
+@numba.njit(cache=True, nogil=True)
+def _allocate(mass, n, floor, u, out):
+    """Particles per arena after resampling, ``out (A,)`` summing to ``n``: ``floor`` for
+    every arena with non-zero posterior mass (fewer if they do not fit), the rest in
+    proportion to the masses by systematic sampling (offset ``u`` in [0, 1))."""
+    alive = 0
+    for a in range(mass.size):
+        if mass[a] > 0.0:
+            alive += 1
+    floor = min(floor, n // max(alive, 1))
+    rest = n - floor * alive
+    total = 0.0
+    for a in range(mass.size):
+        total += mass[a]
+    cum = 0.0
+    given = 0
+    for a in range(mass.size):
+        cum += mass[a]
+        upto = min(int(cum / total * rest + u), rest) if a < mass.size - 1 else rest
+        out[a] = (upto - given) + (floor if mass[a] > 0.0 else 0)
+        given = upto
 
 
 @numba.njit(cache=True, inline="always")

@@ -11,8 +11,9 @@ a trial. Exactly:
   (cell ``h``), pooling steps ``t - w ... t + w`` (``w <= t``, so the first steps,
   where the prior widens quickly, pool only their neighbours), read as a mixture of
   isotropic Gaussian kernels of variance ``s^2 = h^2 / 12`` (that of a uniform cell) at
-  the cell centres :math:`c_j` with the cell counts as weights :math:`\pi_{tj}`. The prior knows nothing of
-  the trial's own arena (its walls are novel in the generalized task).
+  the cell centres :math:`c_j` with the cell counts as weights :math:`\pi_{tj}`. The
+  prior knows nothing of the trial's own arena (its walls are novel in the generalized
+  task).
 * **Likelihood.** Path integration gives :math:`m_t = \hat r_0 + \sum_{u \le t}
   D^{obs}_u` with an isotropic Gaussian error of per-axis variance
 

@@ -189,8 +189,8 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
             obs.angle[b], obs.path_length[b], pf.intermediate_checks, noise.speed_sd,
             noise.rotation_sd, pf.resample_threshold, model.kernel_args(), model.heading_sd,
             model.touch_range, model.min_clearance, model.outlier_probability,
-            model.outlier_density, floor, relative, class_output, snapshot_of_step, estimate[b], mean[b], cov[b], classes[b],
-            snap_xy[b], snap_w[b], snap_arena[b])
+            model.outlier_density, floor, relative, class_output, snapshot_of_step,
+            estimate[b], mean[b], cov[b], classes[b], snap_xy[b], snap_w[b], snap_arena[b])
 
     if threads == 1 or n_trials == 1:
         for b in range(n_trials):

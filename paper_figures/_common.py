@@ -43,13 +43,17 @@ class FigureConfig:
     slam_trials: int = 20
     map_trials: int = 60         # trials of the two-arena recordings (rate maps)
     remap_trials: int = 400      # specialized trials for remapping / selectivity
-    dimension_samples: int = 4000
+    dimension_samples: int = 6000
     seed: int = 0
 
     @property
     def cache(self) -> Path:
         return ROOT / "recordings" / f"paper-{self.name}"
 
+
+#: Range of the correlation sum searched for the scaling region (fig5): down to 1e-5 so
+#: that steep (high-dimensional) curves still span half a decade of r.
+DIMENSION_C_RANGE = (1e-5, 0.1)
 
 CONFIGS = {
     "full": FigureConfig(),

@@ -131,6 +131,7 @@ class _PeepholeLSTMFunction(torch.autograd.Function):
         d_gates = torch.empty_like(gates)
         w_h4 = w_h.view(4, H, H)
         d_w_h4 = torch.zeros_like(w_h4)
+        d_w_x4 = x.new_zeros(4, H, F)
         for t in range(T - 1, -1, -1):
             dh = dh_all[t]
             dg = d_gates[t]
@@ -140,8 +141,13 @@ class _PeepholeLSTMFunction(torch.autograd.Function):
             dc.mul_(k_c[t])
             (dh_all[t - 1] if t > 0 else dh0).addbmm_(dg, w_h4)
             d_w_h4.baddbmm_(dg.transpose(1, 2), hidden[t].expand(4, B, H))
-        d_w_x = torch.matmul(d_gates.transpose(2, 3), x.unsqueeze(1)).sum(0).view(4 * H, F)
-        d_bias = d_gates.sum((0, 2)).view(4 * H)
+            # per step while dg is in cache: one (T, 4, B, H) x (T, B, F) product after the
+            # loop was a 2,000-batch bmm, 6x slower
+            d_w_x4.baddbmm_(dg.transpose(1, 2), x[t].expand(4, B, F))
+        d_w_x = d_w_x4.view(4 * H, F)
+        # reduce over the contiguous leading dim first: a sum over dims (0, 2) at once
+        # took a strided path ~10x slower
+        d_bias = d_gates.sum(0).sum(1).view(4 * H)
         d_w_peep = torch.stack([
             (d_gates[:, 0] * cells[:-1]).sum((0, 1)),
             (d_gates[:, 1] * cells[:-1]).sum((0, 1)),

@@ -222,7 +222,8 @@ def network_info() -> dict:
         log = json.loads(p.read_text())
         info[p.name.removesuffix(".log.json")] = {
             "steps_done": log.get("steps_done"), "steps_budget": log["config"]["steps"],
-            "finished": log.get("finished"), "wall_time_s": log.get("wall_time_s")}
+            "finished": log.get("finished"), "wall_time_s": log.get("wall_time_s"),
+            "base_network_steps": (log.get("base_network") or {}).get("steps_done")}
     return info
 
 

@@ -60,10 +60,14 @@ def _maps_panel(sub, rec, title, numbers, key):
     fig = sub
     verts = rec.arena_vertices
     for row, u in enumerate(examples):
-        for col, (m, env) in enumerate(zip(maps, (a, a, b))):
+        # one colour scale per unit across its three maps, so A-vs-B differences show
+        imgs = [m.isel(unit=u) for m in maps]
+        lo = min(float(i.min()) for i in imgs)
+        hi = max(float(i.max()) for i in imgs)
+        for col, (img, env) in enumerate(zip(imgs, (a, a, b))):
             ax = fig.add_subplot(gs[row, col])
-            img = m.isel(unit=u)
-            ax.pcolormesh(img.x, img.y, img, shading="nearest", cmap="viridis")
+            mesh = ax.pcolormesh(img.x, img.y, (img - lo) / (hi - lo or 1.0),
+                                 shading="nearest", cmap="viridis", vmin=0, vmax=1)
             v = verts.sel(environment_id=env).values
             ax.plot(*np.vstack([v, v[:1]]).T, color="w", lw=0.8)
             ax.set_aspect("equal")
@@ -74,15 +78,18 @@ def _maps_panel(sub, rec, title, numbers, key):
                              fontsize=7)
             if col == 0:
                 ax.set_ylabel(f"unit {int(rec.unit[u])}", fontsize=7)
+    fig.colorbar(mesh, ax=list(fig.axes), shrink=0.5, pad=0.02,
+                 label="activity, scaled per unit (0 = min, 1 = max)").ax.tick_params(
+                     labelsize=6)
     ax = fig.add_subplot(gs[:, 3])
     bins = np.linspace(-1, 1, 21)
     ax.hist(same[np.isfinite(same)], bins, alpha=0.7, color="k", label="A vs A")
     ax.hist(across[np.isfinite(across)], bins, alpha=0.5, color="tab:red", label="A vs B")
-    ax.set_xlabel("rate-map correlation", fontsize=7)
-    ax.set_ylabel("units", fontsize=7)
-    ax.legend(frameon=False, fontsize=6)
-    ax.tick_params(labelsize=6)
-    ax.set_title("stability across all units", fontsize=8)
+    ax.set_xlabel("rate-map correlation (Pearson)", fontsize=8)
+    ax.set_ylabel("units", fontsize=8)
+    ax.legend(frameon=False, fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.set_title("stability across all units", fontsize=9)
     sub.suptitle(title, fontsize=10, x=0.02, ha="left")
     numbers[key] = {"stability_same_arena_median": float(np.nanmedian(same)),
                     "correlation_across_arenas_median": float(np.nanmedian(across)),
@@ -127,7 +134,8 @@ def make(cfg, out):
     ax.hist(mvl, bins=30, color="gray")
     ax.set_xlabel("mean vector length R (from the tuning curve)")
     ax.set_ylabel("units")
-    ax.set_title("C head-direction tuning, all units (specialized network)", fontsize=9)
+    ax.set_title("C (cont.)  mean vector length of all units (specialized network)",
+                 fontsize=9)
 
     sim = hp.remapping_similarity(many)
     ax = bottom[0].add_subplot(1, 1, 1)

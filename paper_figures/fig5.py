@@ -2,7 +2,8 @@
 
 A the particle filter's posterior covariance (Cxx, Cyy, Cxy) decoded linearly from the
 localization network's hidden units (cross-validated by trial); B the specialized
-network's posterior over the 100 arenas at a few moments early in a trial; C the
+network's posterior over the 100 arenas at a few moments early in a trial, and the mean
+probability it gives the true arena vs time; C the
 correlation dimension of each network's hidden-state trajectories.
 
     python paper_figures/fig5.py [--size tiny|full|paper] [--out figures/]
@@ -10,6 +11,7 @@ correlation dimension of each network's hidden-state trajectories.
 
 import matplotlib.pyplot as plt
 import numpy as np
+import xarray as xr
 
 import hippo_probe as hp
 
@@ -19,6 +21,15 @@ except ImportError:
     import _common as C
 
 SNAPSHOTS_S = (2.0, 10.0, 30.0, 80.0)
+
+
+def _true_class_probability(rec):
+    """Mean over trials of the probability given to each sample's true arena, vs time."""
+    env_ids = rec.environment_id.values
+    column = np.searchsorted(env_ids, rec.environment.values)
+    p = rec.class_probability.values[np.arange(rec.sizes["time"]), column]
+    p = xr.DataArray(p, dims="time", coords={"trial_time": ("time", rec.trial_time.values)})
+    return p.groupby("trial_time").mean()
 
 
 def make(cfg, out):
@@ -37,9 +48,11 @@ def make(cfg, out):
         step = max(ok.sum() // 4000, 1)
         a.scatter(truth[ok][::step], pred[ok][::step], s=2, alpha=0.3, color="k")
         lim = [np.nanmin(truth), np.nanmax(truth)]
-        a.plot(lim, lim, color="tab:red", lw=0.8)
+        a.plot(lim, lim, color="tab:red", lw=0.8, label="identity")
+        a.legend(frameon=False, fontsize=7, loc="upper left")
         r2 = float(dec.r2.sel(cov=comp))
-        a.set_title(f"A  C{comp}: R² = {r2:.2f}", fontsize=9)
+        a.set_title(f"A  C{comp} (localization network): cross-validated R² = {r2:.2f}",
+                    fontsize=9)
         a.set_xlabel(f"particle filter C{comp} (m²)")
         a.set_ylabel(f"decoded from units (m²)")
         numbers.setdefault("A_r2", {})[comp] = r2
@@ -74,7 +87,15 @@ def make(cfg, out):
         a.set_title(f"C  {name}: D = {res.attrs['dimension']:.2f}", fontsize=9)
         a.legend(frameon=False, fontsize=7)
         numbers.setdefault("C_dimension", {})[name] = float(res.attrs["dimension"])
-    ax[1, 3].axis("off")
+    a = ax[1, 3]
+    p_true = _true_class_probability(spec)
+    a.plot(p_true.trial_time, p_true, color="k", label="network")
+    a.axhline(1 / spec.sizes["environment_id"], color="gray", ls=":", label="chance")
+    a.set_xlabel("time in trial (s)")
+    a.set_ylabel("posterior of the true arena")
+    a.set_title(f"B (cont.)  mean over {spec.sizes['trial_id']} trials", fontsize=9)
+    a.legend(frameon=False, fontsize=7)
+    numbers["B_mean_true_class_probability_end"] = float(p_true[-1])
     fig.suptitle("Fig. 5 — uncertainty, arena identity and dimensionality in the population")
     C.save(fig, "fig5", numbers, cfg, out)
     return numbers

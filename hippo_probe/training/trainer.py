@@ -71,7 +71,10 @@ def build_network(config: TrainConfig) -> Navigator:
         own.update({k: v for k, v in state.items()
                     if k in own and not k.startswith(fresh)})
         net.load_state_dict(own)
-        net.base_network = {"file": str(path), "sha1": _sha1(path),
+        # the name as given and the file's name: an absolute path would leak the trainer's
+        # machine into shipped logs; the sha1 identifies the file
+        net.base_network = {"init_from": config.init_from, "file": path.name,
+                            "sha1": _sha1(path),
                             "steps_done": obj.get("steps_done", obj.get("step")),
                             "finished": obj.get("finished")}
     if config.train_only == "classifier":

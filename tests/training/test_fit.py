@@ -140,7 +140,8 @@ def test_export_and_readout_retraining(uninterrupted, tmp_path):
         else:
             torch.testing.assert_close(new[k], old[k], rtol=0, atol=0)
     log = json.loads((tmp_path / "readout" / "log.json").read_text())
-    assert log["base_network"]["file"] == str(pt) and log["class_weight"] == 1.0
+    assert log["base_network"]["file"] == pt.name and log["class_weight"] == 1.0
+    assert log["base_network"]["init_from"] == str(pt)
 
 
 def test_readout_retraining_needs_the_specialized_task():

@@ -53,7 +53,7 @@ _LAZY_ATTRS = {
 }
 _SUBMODULES = {
     "world", "tasks", "model", "training", "baselines", "recording", "analysis", "plot",
-    "pretrained", "cli", "config",
+    "pretrained", "cli",
 }
 
 __all__ = sorted(

@@ -40,3 +40,7 @@ def test_public_names_resolve():
     assert callable(hippo_probe.world.random_arena)
     assert callable(hippo_probe.tasks.make_trials)
     assert {"world", "tasks"} <= set(dir(hippo_probe))
+    # every advertised name exists (a name in __all__ without a module behind it would
+    # show in tab completion and then fail)
+    for name in hippo_probe.__all__:
+        assert getattr(hippo_probe, name) is not None, name

@@ -34,7 +34,7 @@ def classification_accuracy(rec, probability="class_probability"):
 
     References
     ----------
-    Kanitscheider & Fiete (2017), NIPS 30 (Fig. 4: classification of the arena).
+    Kanitscheider & Fiete (2017), NIPS 30 (Fig. 3C: classification of the arena).
 
     Examples
     --------

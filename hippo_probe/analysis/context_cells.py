@@ -63,7 +63,7 @@ def context_cells(rec, weights=None, *, bin_size=None, min_speed=None):
     References
     ----------
     Kanitscheider & Fiete (2017), Training recurrent networks to generate hypotheses
-    about how the brain solves hard navigation problems, NIPS 30 (Fig. 5, context cells).
+    about how the brain solves hard navigation problems, NIPS 30 (Fig. 4E, context cells).
     Spearman (1904), The proof and measurement of association between two things, Am. J.
     Psychol. 15:72-101.
 

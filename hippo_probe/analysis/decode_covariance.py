@@ -117,7 +117,7 @@ def decode_covariance(rec, target="pf_cov", *, n_folds=None, alphas=None, seed=0
     References
     ----------
     Hoerl & Kennard (1970), Ridge regression, Technometrics 12:55-67. Kanitscheider &
-    Fiete (2017), NIPS 30 (Fig. 3: the LSTM's units encode the posterior covariance).
+    Fiete (2017), NIPS 30 (Fig. 5A: the LSTM's units encode the posterior covariance).
 
     Examples
     --------

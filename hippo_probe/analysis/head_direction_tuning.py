@@ -91,8 +91,10 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     -------
     xarray.Dataset
         ``tuning_curve`` (unit, [group], direction) with coord ``occupancy`` (s);
-        ``mean_vector_length``, ``preferred_direction`` (rad), ``p_value`` (with
-        shuffles), ``rayleigh_p`` (spike counts only).
+        ``mean_vector_length``, ``preferred_direction`` (rad); with shuffles,
+        ``p_value`` = (1 + k) / (1 + n) for k of n shuffled lengths at least the observed
+        one, and ``shuffle_r95`` (the shuffles' 95th percentile); ``rayleigh_p`` (spike
+        counts only).
 
     References
     ----------

@@ -14,10 +14,11 @@ if [ ! -x .venv/bin/python ]; then
 fi
 . .venv/bin/activate
 export PIP_DISABLE_PIP_VERSION_CHECK=1
-# Install torch 2.13.0 before the project, so the project's range is already met and pip
-# never pulls a multi-GB CUDA build.
+# Install torch 2.13.0 before the project, so the project's range is already met. Where
+# the default index serves a CUDA build (PyPI on Linux x86_64 does: several GB), set
+# TORCH_INDEX_URL=https://download.pytorch.org/whl/cpu to take the CPU build instead.
 python -c "import torch, sys; sys.exit(0 if torch.__version__.startswith('2.13.0') else 1)" \
-  2>/dev/null || pip install -q "torch==2.13.0"
+  2>/dev/null || pip install -q "torch==2.13.0" ${TORCH_INDEX_URL:+--index-url "$TORCH_INDEX_URL"}
 pip install -q -e ".[test,nwb,distributed]"
 export MPLBACKEND=Agg
 

@@ -40,7 +40,7 @@ class FigureConfig:
     trials: int = 200            # test trials per recording
     particles: int = 1000        # oracular particle filter
     slam_particles: tuple = (100, 1000, 10000)
-    slam_trials: int = 20
+    slam_trials: int = 50         # PF-SLAM at 10,000 particles: ~30 s on 2 cores
     map_trials: int = 60         # trials of the two-arena recordings (rate maps)
     remap_trials: int = 400      # specialized trials for remapping / selectivity
     dimension_samples: int = 6000

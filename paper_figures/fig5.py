@@ -23,6 +23,21 @@ except ImportError:
 SNAPSHOTS_S = (2.0, 10.0, 30.0, 80.0)
 
 
+def _r2_time_alone(truth, trial_time):
+    """Leave-one-trial-out R² of a predictor that knows only the time in trial (the mean
+    of the other trials at that time): the control for decoding, since the posterior
+    shrinks predictably as a trial goes on."""
+    ok = np.isfinite(truth)
+    truth, trial_time = truth[ok], trial_time[ok]
+    _, group = np.unique(trial_time, return_inverse=True)
+    n = np.bincount(group)
+    total = np.bincount(group, truth)
+    keep = n[group] > 1
+    others = (total[group] - truth)[keep] / (n[group] - 1)[keep]
+    truth = truth[keep]
+    return float(1 - np.sum((truth - others) ** 2) / np.sum((truth - truth.mean()) ** 2))
+
+
 def _true_class_probability(rec):
     """Mean over trials of the probability given to each sample's true arena, vs time."""
     env_ids = rec.environment_id.values
@@ -51,8 +66,10 @@ def make(cfg, out):
         a.plot(lim, lim, color="tab:red", lw=0.8, label="identity")
         a.legend(frameon=False, fontsize=7, loc="upper left")
         r2 = float(dec.r2.sel(cov=comp))
-        a.set_title(f"A  C{comp} (localization network): cross-validated R² = {r2:.2f}",
-                    fontsize=9)
+        r2_time = _r2_time_alone(truth, loc.trial_time.values)
+        a.set_title(f"A  C{comp} (localization network): cross-validated R² = {r2:.2f}\n"
+                    f"(time in trial alone: R² = {r2_time:.2f})", fontsize=9)
+        numbers.setdefault("A_r2_time_in_trial_alone", {})[comp] = r2_time
         a.set_xlabel(f"particle filter C{comp} (m²)")
         a.set_ylabel(f"decoded from units (m²)")
         numbers.setdefault("A_r2", {})[comp] = r2

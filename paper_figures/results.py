@@ -24,74 +24,149 @@ def _fmt(x, spec=".2f"):
     return "n/a" if x is None else format(x, spec)
 
 
+def _verdict(ok, partly=False, rule=""):
+    """A claim's verdict by a stated rule (the rules are ours: the paper gives no
+    tolerances)."""
+    word = "reproduced" if ok else ("partly" if partly else "not reproduced")
+    return f"{word} ({rule})" if rule else word
+
+
+def _ratio(a, b):
+    return None if a is None or b is None or b == 0 else a / b
+
+
 def rows(fig):
+    """(claim, paper, this project, verdict) for every quantitative claim of the study."""
     f2, f3, f4, f5 = (fig.get(k, {}) for k in ("fig2", "fig3", "fig4", "fig5"))
+    n2, n3 = f2.get("n_trials"), f3.get("size", {}).get("trials")
+    slam_n = f3.get("size", {}).get("slam_trials")
+
     pf_loc = _get(f2, "summary", "particle filter (oracle)", "200s")
     net_loc = _get(f2, "summary", "network", "200s")
-    gen = _get(f3, "A_generalized_error")
+    r = _get(f2, "summary", "network / PF error, t > 100 s")
     yield ("Fig. 2: the localization network is about as good as the optimal (oracular) "
            "particle filter in its familiar arena",
            "network ≈ PF",
-           f"network / PF error (t > 100 s) = "
-           f"{_fmt(_get(f2, 'summary', 'network / PF error, t > 100 s'))}; at 200 s: "
-           f"network {_fmt(net_loc, '.3f')} m, PF {_fmt(pf_loc, '.3f')} m")
-    pi_200 = gen and gen.get("path integration") and gen["path integration"][-1]
+           f"network / PF error (mean over t > 100 s) = {_fmt(r)}; at 200 s: network "
+           f"{_fmt(net_loc, '.3f')} m, PF {_fmt(pf_loc, '.3f')} m ({n2} test trials)",
+           _verdict(r is not None and r <= 1.2, r is not None and r <= 2,
+                    "ratio ≤ 1.2; partly ≤ 2"))
+
+    gen = _get(f3, "A_generalized_error") or {}
+    r = _get(f3, "A_ratio_network_to_pf_t_gt_100s")
+    net_200 = (gen.get("network") or [None])[-1]
+    pi_200 = (gen.get("path integration") or [None])[-1]
+    beats_pi = None if net_200 is None or pi_200 is None else net_200 < 0.75 * pi_200
     yield ("Fig. 3A: in novel arenas the generalized network is within ~1.5x of the "
            "oracular PF and far better than path integration",
-           "≈ 1.5x PF (approximate, read from the main text); << PI",
-           f"network / PF error (t > 100 s) = {_fmt(_get(f3, 'A_ratio_network_to_pf_t_gt_100s'))}; "
-           f"at 200 s: network {_fmt(gen and gen['network'][-1], '.3f')} m, PF "
-           f"{_fmt(gen and gen['particle filter (oracle)'][-1], '.3f')} m, PI "
-           f"{_fmt(pi_200, '.3f')} m")
-    acc = _get(f3, "C_accuracy_at")
+           "≈ 1.5x PF (read from the main text); << PI",
+           f"network / PF error (t > 100 s) = {_fmt(r)}; at 200 s: network "
+           f"{_fmt(net_200, '.3f')} m, PF "
+           f"{_fmt((gen.get('particle filter (oracle)') or [None])[-1], '.3f')} m, PI "
+           f"{_fmt(pi_200, '.3f')} m, naive Bayes "
+           f"{_fmt((gen.get('naive Bayes') or [None])[-1], '.3f')} m ({n3} trials)",
+           _verdict(bool(beats_pi) and r is not None and r <= 2, bool(beats_pi),
+                    "ratio ≤ 2 and error < 0.75 PI at 200 s; partly: only the latter"))
+
+    acc = _get(f3, "C_accuracy_at") or {}
+    a200 = acc.get("200s")
     yield ("Fig. 3C: the specialized network identifies its arena (of 100) with accuracy "
            "near 100% within 200 s",
            "≈ 100% by 200 s",
            "accuracy at 50/100/200 s = " + (", ".join(_fmt(v) for v in acc.values())
-                                             if acc else "n/a"))
-    ro = _get(f3, "F_readout_accuracy_at")
+                                             if acc else "n/a") + f" (chance 0.01; {n3} trials)",
+           _verdict(a200 is not None and a200 >= 0.9, a200 is not None and a200 >= 0.5,
+                    "≥ 0.9 at 200 s; partly ≥ 0.5"))
+
+    ro = _get(f3, "F_readout_accuracy_at") or {}
+    r200 = ro.get("200s")
     yield ("Fig. 3F: retraining only the readout of the generalized network classifies "
            "the arenas at about 85%",
            "≈ 85%",
            "accuracy at 50/100/200 s = " + (", ".join(_fmt(v) for v in ro.values())
-                                             if ro else "n/a"))
-    slam = {k: v for k, v in f3.items() if k.startswith("E_pfslam_")}
-    slam_txt = "; ".join(f"{k.split('_')[2]} particles: {_fmt(v.get('200s'))}"
-                         for k, v in slam.items())
+                                             if ro else "n/a") + f" ({n3} trials)",
+           _verdict(r200 is not None and r200 >= 0.7, r200 is not None and r200 >= 0.3,
+                    "≥ 0.7 at 200 s; partly ≥ 0.3"))
+
+    slam = sorted((int(k.split("_")[2]), v) for k, v in f3.items()
+                  if k.startswith("E_pfslam_"))
+    slam_err = {int(k.split("_")[2]): v for k, v in f3.items() if k.startswith("D_pfslam_")}
+    slam_txt = "; ".join(f"{n:,} particles: accuracy {_fmt(v.get('200s'))}, error "
+                         f"{_fmt(slam_err.get(n, {}).get('200s'), '.3f')} m"
+                         for n, v in slam)
+    net_acc = _get(f3, "E_network_accuracy_at", "200s")
+    best = slam[-1][1].get("200s") if slam else None
     yield ("Fig. 3D-E: the specialized network is comparable to a PF-SLAM with 10,000 "
            "particles",
            "≈ PF-SLAM 10k",
-           f"accuracy at 200 s — network {_fmt(_get(f3, 'E_network_accuracy_at', '200s'))}; "
-           f"PF-SLAM {slam_txt or 'n/a'}; error at 200 s — network "
-           f"{_fmt(_get(f3, 'D_network_error_at', '200s'), '.3f')} m")
+           f"at 200 s, on {slam_n} trials — network: accuracy {_fmt(net_acc)}, error "
+           f"{_fmt(_get(f3, 'D_network_error_at', '200s'), '.3f')} m; PF-SLAM "
+           f"{slam_txt or 'n/a'}",
+           _verdict(net_acc is not None and best is not None and net_acc >= 0.8 * best,
+                    rule="network accuracy ≥ 0.8 × PF-SLAM 10k's"))
+
     dims = _get(f5, "C_dimension") or {}
+    paper = {"localization": 5.5, "generalized": 5.6, "specialized": 8.5}
+    close = [abs(dims[k] / v - 1) <= 0.2 for k, v in paper.items() if k in dims]
+    ordered = bool(dims) and max(dims, key=dims.get) == "specialized"
     yield ("Fig. 5C: correlation dimension of the hidden-state trajectories",
-           "5.5 / 5.6 / 8.5 (three networks; the mapping to networks is taken from the "
-           "project brief, the SI is unavailable)",
-           " / ".join(f"{k} {_fmt(v, '.1f')}" for k, v in dims.items()) or "n/a")
-    yield ("Fig. 5A: the PF's posterior covariance is linearly decodable from the units",
+           "5.5 / 5.6 / 8.5 (localization / generalized / specialized, as the project "
+           "brief maps them; the SI is unavailable)",
+           " / ".join(f"{k} {_fmt(v, '.1f')}" for k, v in dims.items()) or "n/a",
+           _verdict(bool(close) and all(close), ordered,
+                    "each within 20%; partly: the specialized network highest"))
+
+    r2 = _get(f5, "A_r2") or {}
+    r2_t = _get(f5, "A_r2_time_in_trial_alone") or {}
+    gain = [r2[k] - r2_t.get(k, 0.0) for k in ("xx", "yy") if k in r2]
+    yield ("Fig. 5A: the PF's posterior covariance is linearly decodable from the "
+           "localization network's units",
            "decodable",
-           "R² (xx, yy, xy) = " + ", ".join(_fmt(v) for v in (_get(f5, "A_r2") or {}).values()))
+           "cross-validated R² (xx, yy, xy) = " + ", ".join(_fmt(v) for v in r2.values())
+           + ("; from time in trial alone: " + ", ".join(_fmt(v) for v in r2_t.values())
+              if r2_t else ""),
+           _verdict(bool(gain) and min(r2.get("xx", 0), r2.get("yy", 0)) >= 0.5
+                    and min(gain) >= 0.1,
+                    bool(r2) and max(r2.values()) >= 0.3,
+                    "R² ≥ 0.5 for xx and yy, ≥ 0.1 above time in trial alone"))
+
+    rho, p = _get(f4, "E", "rank_correlation"), _get(f4, "E", "rank_correlation_p")
     yield ("Fig. 4E: units projecting strongly onto the classifier are less spatially "
            "selective (negative correlation)",
            "negative",
-           f"Spearman rho = {_fmt(_get(f4, 'E', 'rank_correlation'))} "
-           f"(p = {_fmt(_get(f4, 'E', 'rank_correlation_p'), '.2g')})")
+           f"Spearman rho = {_fmt(rho)} (p = {_fmt(p, '.2g')})",
+           _verdict(rho is not None and rho < 0 and p is not None and p < 0.05,
+                    rho is not None and rho < 0, "rho < 0 with p < 0.05; partly: rho < 0"))
+
+    mvl = _get(f4, "C_mean_vector_length", "median_all_units")
     yield ("Fig. 4C: head-direction tuning is weak",
            "weak",
-           f"median mean vector length {_fmt(_get(f4, 'C_mean_vector_length', 'median_all_units'))}, "
-           f"max {_fmt(_get(f4, 'C_mean_vector_length', 'max'))}")
+           f"median mean vector length {_fmt(mvl)}, max "
+           f"{_fmt(_get(f4, 'C_mean_vector_length', 'max'))} (mouse ADn: 0.84, see the "
+           f"network-vs-rodent table)",
+           _verdict(mvl is not None and mvl < 0.2, rule="median R < 0.2"))
+
+    same_a, same_b = (_get(f4, k, "stability_same_arena_median") for k in "AB")
+    across_a, across_b = (_get(f4, k, "correlation_across_arenas_median") for k in "AB")
     yield ("Fig. 4A-B: place fields are stable across trajectories in the same arena",
            "stable",
-           f"median rate-map correlation A vs A: specialized "
-           f"{_fmt(_get(f4, 'A', 'stability_same_arena_median'))}, generalized "
-           f"{_fmt(_get(f4, 'B', 'stability_same_arena_median'))}")
+           f"median rate-map correlation, same arena vs other arena: specialized "
+           f"{_fmt(same_a)} vs {_fmt(across_a)}, generalized {_fmt(same_b)} vs "
+           f"{_fmt(across_b)}",
+           _verdict(same_a is not None and same_a >= 0.7 and (same_b or 0) >= 0.7,
+                    rule="same-arena median ≥ 0.7"))
+
     d = _get(f4, "D_similarity") or {}
+    within, across = d.get("same"), d.get("different")
     yield ("Fig. 4D: global remapping between arenas",
            "across ≈ 0, within high",
-           f"mean PV correlation within {_fmt(d.get('same'))}, across "
-           f"{_fmt(d.get('different'))} (shuffled labels: {_fmt(d.get('same_permuted'))} / "
-           f"{_fmt(d.get('different_permuted'))})")
+           f"mean population-vector correlation within {_fmt(within)}, across "
+           f"{_fmt(across)} (labels shuffled: {_fmt(d.get('same_permuted'))} / "
+           f"{_fmt(d.get('different_permuted'))})",
+           _verdict(across is not None and within is not None and across < 0.3
+                    and within > 0.7,
+                    across is not None and within is not None and within - across > 0.2,
+                    "across < 0.3 and within > 0.7; partly: within − across > 0.2"))
 
 
 def main():
@@ -115,9 +190,9 @@ def main():
                  f"{'' if v.get('finished') else ' (training not finished)'}"
                  f"{'' if not v.get('base_network_steps') else ' on a base network of ' + str(v['base_network_steps']) + ' steps'}"
                  for k, v in nets.items()), "",
-             "| claim (Kanitscheider & Fiete 2017) | paper | this project |",
-             "| --- | --- | --- |"]
-    lines += [f"| {c} | {p} | {m} |" for c, p, m in rows(figs)]
+             "| claim (Kanitscheider & Fiete 2017) | paper | this project | verdict (rule) |",
+             "| --- | --- | --- | --- |"]
+    lines += [f"| {c} | {p} | {m} | {v} |" for c, p, m, v in rows(figs)]
     notes = Path(a.notes)
     if notes.exists():
         lines += ["", notes.read_text()]

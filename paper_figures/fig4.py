@@ -137,24 +137,32 @@ def make(cfg, out):
     ax.set_title("C (cont.)  mean vector length of all units (specialized network)",
                  fontsize=9)
 
-    sim = hp.remapping_similarity(many)
     ax = bottom[0].add_subplot(1, 1, 1)
-    same = sim.same_environment.values
-    perm = sim.same_environment_permuted.values
-    s = sim.similarity.values
-    for values, label, style in ((s[same], "same arena", "-"), (s[~same], "different arenas", "-"),
-                                 (s[perm], "same (labels shuffled)", ":"),
-                                 (s[~perm], "different (labels shuffled)", ":")):
-        values = np.sort(values[np.isfinite(values)])
-        if len(values):
-            ax.plot(values, np.arange(1, len(values) + 1) / len(values), ls=style,
-                    label=label)
+    colours = {"same": "tab:blue", "different": "tab:orange"}
+    for centred, style in ((False, ":"), (True, "-")):
+        sim = hp.remapping_similarity(many, center_units=centred)
+        s = sim.similarity.values
+        kind = "units centred" if centred else "pooled"
+        for name, mask in (("same", sim.same_environment.values),
+                           ("different", ~sim.same_environment.values)):
+            values = np.sort(s[mask & np.isfinite(s)])
+            if len(values):
+                ax.plot(values, np.arange(1, len(values) + 1) / len(values), ls=style,
+                        color=colours[name], label=f"{name} arena ({kind})")
+        if centred:     # the control: labels permuted, all pairs of the centred measure
+            perm = sim.same_environment_permuted.values
+            values = np.sort(s[perm & np.isfinite(s)])
+            if len(values):
+                ax.plot(values, np.arange(1, len(values) + 1) / len(values), ls="--",
+                        color="gray", label="same arena, labels shuffled (centred)")
+        key = "D_similarity_units_centred" if centred else "D_similarity"
+        numbers[key] = {c: float(sim["mean"].sel(comparison=c))
+                        for c in sim.comparison.values}
     ax.set_xlabel("population-vector correlation between trials")
     ax.set_ylabel("cumulative fraction of trial pairs")
-    ax.set_title("D remapping (specialized network)", fontsize=9)
+    ax.set_title("D remapping (specialized network); centred: each unit's mean removed",
+                 fontsize=9)
     ax.legend(frameon=False, fontsize=7)
-    numbers["D_similarity"] = {c: float(sim["mean"].sel(comparison=c))
-                               for c in sim.comparison.values}
 
     ctx = hp.context_cells(many)
     ax = bottom[1].add_subplot(1, 1, 1)

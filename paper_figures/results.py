@@ -157,12 +157,14 @@ def rows(fig):
                     rule="same-arena median ≥ 0.7"))
 
     d = _get(f4, "D_similarity") or {}
-    within, across = d.get("same"), d.get("different")
+    dc = _get(f4, "D_similarity_units_centred") or {}
+    within, across = dc.get("same"), dc.get("different")
     yield ("Fig. 4D: global remapping between arenas",
            "across ≈ 0, within high",
-           f"mean population-vector correlation within {_fmt(within)}, across "
-           f"{_fmt(across)} (labels shuffled: {_fmt(d.get('same_permuted'))} / "
-           f"{_fmt(d.get('different_permuted'))})",
+           f"mean population-vector correlation, each unit's mean removed: within "
+           f"{_fmt(within)}, across {_fmt(across)} (labels shuffled: "
+           f"{_fmt(dc.get('same_permuted'))} / {_fmt(dc.get('different_permuted'))}); "
+           f"pooled without centring: {_fmt(d.get('same'))} / {_fmt(d.get('different'))}",
            _verdict(across is not None and within is not None and across < 0.3
                     and within > 0.7,
                     across is not None and within is not None and within - across > 0.2,

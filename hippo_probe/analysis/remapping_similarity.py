@@ -46,7 +46,7 @@ def pair_correlations(maps, min_common):
 
 
 def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, extent=None,
-                         min_common_bins=None, seed=None):
+                         min_common_bins=None, seed=None, center_units=False):
     """Population-vector correlation of trial pairs in the same vs different environments.
 
     For trials *a* and *b*, the population vector is the concatenation of all units'
@@ -58,6 +58,13 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
     Pairs are labelled same- or different-environment; global remapping shows as high
     similarity within and near-zero similarity across environments. Control: the same
     split after permuting the trials' environment labels (it must erase the difference).
+
+    The pooled correlation keeps the differences between units' mean levels (as the
+    classic population-vector correlation does), so units with large, arena-independent
+    offsets — an LSTM's h often has them — raise the similarity of *every* pair, across
+    environments too. ``center_units=True`` removes them first: each unit's maps minus
+    its mean over all trials and bins, :math:`\lambda_{u,i} - \bar\lambda_u`, so only
+    where and how much a unit departs from its own average counts.
 
     Parameters
     ----------
@@ -74,6 +81,9 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
         Pairs sharing fewer visited bins give NaN (default 5).
     seed : int, optional
         Seed of the label permutation.
+    center_units : bool
+        Subtract each unit's mean over every trial and bin before correlating (default
+        False: the classic pooled correlation).
 
     Returns
     -------
@@ -120,7 +130,12 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
                          f"{len(trials)}")
     maps = parts["maps"][0]
     n_units, n_trials = maps.shape[:2]
-    r, common = pair_correlations(maps.reshape(n_units, n_trials, -1), min_common)
+    maps = maps.reshape(n_units, n_trials, -1)
+    if center_units:
+        with warnings.catch_warnings():   # a unit without any visited bin stays all-NaN
+            warnings.simplefilter("ignore", RuntimeWarning)
+            maps = maps - np.nanmean(maps.reshape(n_units, -1), axis=1)[:, None, None]
+    r, common = pair_correlations(maps, min_common)
     env = _common.values(rec["environment"])[np.unique(parts["codes"], return_index=True)[1]]
     rng = np.random.default_rng(REMAPPING.seed if seed is None else seed)
     permuted = rng.permutation(env)
@@ -151,6 +166,7 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
     attrs = _common.provenance(
         "remapping_similarity", rec, bin_size=parts["grid"].bin_size, sigma=parts["sigma"],
         sigma_units="bins", min_speed=min_speed, min_common_bins=min_common, seed=seed,
+        center_units=bool(center_units),
         control="environment labels of the trials randomly permuted")
     reasons = [f"the trials share {c} visited bins (< {min_common})" if not np.isfinite(v)
                and c < min_common else "a trial's population vector is constant"

@@ -55,3 +55,18 @@ def test_single_environment_warns_and_single_trial_errors(two_env):
     one_trial = two_env.sel(time=two_env.trial == 0)
     with pytest.raises(ValueError, match="at least 2 trials"):
         hp.remapping_similarity(one_trial)
+
+
+def test_center_units_removes_arena_independent_offsets(two_env):
+    """Large per-unit offsets shared by both environments make every pair look alike in
+    the pooled correlation; centring each unit on its own mean recovers global remapping."""
+    rng = np.random.default_rng(1)
+    offsets = rng.uniform(-1.0, 1.0, two_env.sizes["unit"]) * 5 * float(two_env.activity.std())
+    shifted = two_env.copy()
+    shifted["activity"] = two_env.activity + offsets
+    raw = hp.remapping_similarity(shifted)["mean"].to_series()
+    centred = hp.remapping_similarity(shifted, center_units=True)
+    mean = centred["mean"].to_series()
+    assert raw["different"] > 0.8                      # the offsets dominate ...
+    assert abs(mean["different"]) < 0.1 and mean["same"] > 0.9   # ... until removed
+    assert centred.attrs["center_units"] is True

@@ -191,7 +191,7 @@ class CorrelationDimensionConfig:
     max_points : int
         At most 4,000 points (8 million pairs) are used, drawn at random; pair counts are
         accumulated in blocks so memory stays bounded.
-    theiler : float
+    theiler : int
         Pairs closer in time than 10 samples (within a trial) are excluded: temporally
         adjacent states are close because of continuity, not because of the attractor's
         geometry (Theiler 1986).
@@ -208,8 +208,8 @@ class CorrelationDimensionConfig:
         The scaling range is searched where 1e-4 <= C(r) <= 0.1: below, too few pairs;
         above, the finite size of the set bends the curve.
     min_decades : float
-        The fit uses the window of at least 0.5 decade of r in that range whose local slopes
-        vary least.
+        The fit uses the window of at least 0.5 decade of r in that range whose straight-line
+        fit has the smallest RMS residual per decade of width.
     block : int
         Rows per block of the pairwise-distance computation (512 x 4,000 distances, 16 MB).
     seed : int

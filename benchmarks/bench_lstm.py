@@ -5,7 +5,11 @@ every step, backward, and an Adam update — what one optimizer step of training
 Peer: ``torch.nn.LSTM`` (fused C++ kernel, no peepholes). Also shown: a naive per-step
 Python loop with peepholes under autograd (``unbind``), the obvious alternative.
 
-    python benchmarks/bench_lstm.py [--batch 64] [--steps 500] [--hidden 256] [--threads 2]
+    python benchmarks/bench_lstm.py [--batch 64] [--steps 500] [--hidden 256]
+        [--threads 1 2] [--naive] [--plot benchmarks/bench_lstm.png]
+
+``--plot`` saves a bar chart of the median time per training step of each implementation
+at each thread count, labelled with its throughput relative to torch.nn.LSTM.
 """
 
 import argparse
@@ -61,34 +65,72 @@ def time_step(core, readout, x, y, repeats):
     return min(times), sorted(times)[len(times) // 2]
 
 
+def plot(results, threads, path, title):
+    """Grouped bars: median seconds per step, per implementation and thread count, each
+    labelled with its throughput as a multiple of torch.nn.LSTM's."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    names = list(results[threads[0]])
+    fig, ax = plt.subplots(figsize=(7, 3.6), constrained_layout=True)
+    width = 0.8 / len(names)
+    for k, name in enumerate(names):
+        xs = np.arange(len(threads)) + (k - (len(names) - 1) / 2) * width
+        med = [results[t][name][1] for t in threads]
+        bars = ax.bar(xs, med, width, label=name)
+        for bar, t, m in zip(bars, threads, med):
+            peer = results[t][names[0]][1]
+            ax.annotate(f"{peer / m:.2f}x", (bar.get_x() + bar.get_width() / 2, m),
+                        ha="center", va="bottom", fontsize=8)
+    ax.set_xticks(np.arange(len(threads)), [f"{t} thread{'s' * (t > 1)}" for t in threads])
+    ax.set_ylabel("median time per training step (s)")
+    ax.set_title(title, fontsize=9)
+    ax.legend(frameon=False, fontsize=8, loc="lower right")
+    fig.savefig(path, dpi=130)
+    print(f"saved {path}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--steps", type=int, default=500)
     ap.add_argument("--hidden", type=int, default=256)
     ap.add_argument("--features", type=int, default=9)
-    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--threads", type=int, nargs="+", default=[2])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--naive", action="store_true", help="also time the naive Python loop")
+    ap.add_argument("--plot", default=None, help="save a bar chart here (PNG)")
     a = ap.parse_args()
-    torch.set_num_threads(a.threads)
     torch.manual_seed(0)
     x = torch.randn(a.steps, a.batch, a.features)
     y = torch.randn(a.steps, a.batch, 2)
-    print(f"batch {a.batch}, {a.steps} steps, {a.hidden} units, {a.threads} threads, "
-          f"load avg {os.getloadavg()[0]:.2f}")
-    rows = [("torch.nn.LSTM (peer, no peepholes)", nn.LSTM(a.features, a.hidden)),
-            ("hippo_probe PeepholeLSTM", PeepholeLSTM(a.features, a.hidden))]
-    if a.naive:
-        rows.append(("naive per-step loop (unbind)", NaiveLoop(a.features, a.hidden)))
-    results = {}
-    for name, core in rows:
-        readout = nn.Linear(a.hidden, 2)
-        results[name] = time_step(core, readout, x, y, a.repeats)
-    peer = results[rows[0][0]][1]
-    print(f"{'':40s} {'best s':>8s} {'median s':>9s} {'seq/s':>8s} {'throughput vs peer':>19s}")
-    for name, (best, med) in results.items():
-        print(f"{name:40s} {best:8.3f} {med:9.3f} {a.batch / med:8.1f} {peer / med:18.2f}x")
+    load = os.getloadavg()[0]
+    all_results = {}
+    for threads in a.threads:
+        torch.set_num_threads(threads)
+        print(f"batch {a.batch}, {a.steps} steps, {a.hidden} units, {threads} threads, "
+              f"load avg {os.getloadavg()[0]:.2f}")
+        rows = [("torch.nn.LSTM (peer, no peepholes)", nn.LSTM(a.features, a.hidden)),
+                ("hippo_probe PeepholeLSTM", PeepholeLSTM(a.features, a.hidden))]
+        if a.naive:
+            rows.append(("naive per-step loop (unbind)", NaiveLoop(a.features, a.hidden)))
+        results = {}
+        for name, core in rows:
+            readout = nn.Linear(a.hidden, 2)
+            results[name] = time_step(core, readout, x, y, a.repeats)
+        peer = results[rows[0][0]][1]
+        print(f"{'':40s} {'best s':>8s} {'median s':>9s} {'seq/s':>8s} "
+              f"{'throughput vs peer':>19s}")
+        for name, (best, med) in results.items():
+            print(f"{name:40s} {best:8.3f} {med:9.3f} {a.batch / med:8.1f} "
+                  f"{peer / med:18.2f}x")
+        all_results[threads] = results
+    if a.plot:
+        plot(all_results, a.threads, a.plot,
+             f"one Adam step: batch {a.batch} x {a.steps} steps x {a.hidden} units "
+             f"(load avg {load:.1f} at start)")
 
 
 if __name__ == "__main__":

@@ -103,6 +103,7 @@ def make(cfg, out):
     acc_r = hp.classification_accuracy(readout)
     ax[5].plot(t, acc_r.accuracy, color="tab:green", label="generalized net, new readout")
     ax[5].plot(t, acc.accuracy, color="k", alpha=0.5, label="specialized net")
+    ax[5].axhline(1 / readout.sizes["environment_id"], color="gray", ls=":", label="chance")
     ax[5].set_title("F  readout retraining")
     numbers["F_readout_accuracy_at"] = C.at_times(t, acc_r.accuracy.values)
     for a in (ax[2], ax[4], ax[5]):
@@ -112,6 +113,8 @@ def make(cfg, out):
         a.set_xlabel("time in trial (s)")
         a.set_xlim(0, t[-1])
         a.legend(frameon=False, fontsize=7)
+    # below the PF-SLAM curves' plateau, above the 100-particle line
+    ax[4].legend(frameon=False, fontsize=7, loc="lower right", bbox_to_anchor=(1, 0.2))
     ax[3].set_ylim(bottom=0)
     fig.suptitle(f"Fig. 3 — {gen.sizes['trial_id']} test trials per panel (A-C, F)")
     C.save(fig, "fig3", numbers, cfg, out)

@@ -91,10 +91,11 @@ def make(cfg, out):
 
     for k, (name, rec) in enumerate((("localization", loc), ("generalized", gen),
                                      ("specialized", spec))):
-        # C(r) of high-dimensional sets rises steeply: search the scaling range down to
-        # C = 1e-5 (hundreds of pairs with 6,000 points) so it spans half a decade of r
+        # C(r) of high-dimensional sets rises steeply: see DIMENSION_C_RANGE and
+        # DIMENSION_MIN_DECADES for the search of the scaling range
         res = hp.correlation_dimension(rec, max_points=cfg.dimension_samples,
-                                       c_range=C.DIMENSION_C_RANGE)
+                                       c_range=C.DIMENSION_C_RANGE,
+                                       min_decades=C.DIMENSION_MIN_DECADES)
         a = ax[1, k]
         a.plot(res.log_r, res.log_c, color="k")
         lo, hi = np.log10(res.attrs["r_min"]), np.log10(res.attrs["r_max"])

@@ -105,7 +105,7 @@ def rows(fig):
            _verdict(net_acc is not None and best is not None and net_acc >= 0.8 * best,
                     rule="network accuracy ≥ 0.8 × PF-SLAM 10k's"))
 
-    dims = _get(f5, "C_dimension") or {}
+    dims = {k: v for k, v in (_get(f5, "C_dimension") or {}).items() if v is not None}
     paper = {"localization": 5.5, "generalized": 5.6, "specialized": 8.5}
     close = [abs(dims[k] / v - 1) <= 0.2 for k, v in paper.items() if k in dims]
     ordered = bool(dims) and max(dims, key=dims.get) == "specialized"

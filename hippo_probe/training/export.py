@@ -46,6 +46,9 @@ def export_network(run_dir, name: str, dest=None) -> list:
     save_atomic(network, pt)
     log.update(steps_done=ckpt["step"], finished=finished,
                best_validation_loss=ckpt["best_loss"])
+    if isinstance(log.get("command"), str):       # logs written before _command_line
+        program, *rest = log["command"].split(" ")
+        log["command"] = " ".join([Path(program).name, *rest])
     js = dest / f"{name}.log.json"
     tmp = js.with_suffix(".tmp")
     tmp.write_text(json.dumps(_jsonable(log), indent=0))

@@ -83,6 +83,11 @@ def build_network(config: TrainConfig) -> Navigator:
     return net
 
 
+def _command_line() -> str:
+    """The command as typed: the program's name, not its path on the trainer's machine."""
+    return " ".join([Path(sys.argv[0]).name, *sys.argv[1:]])
+
+
 def _sha1(path) -> str:
     import hashlib
     return hashlib.sha1(Path(path).read_bytes()).hexdigest()
@@ -244,7 +249,7 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
            "model_config": vars(net.config) | {"input_scale": list(net.config.input_scale)},
            "base_network": net.base_network,
            "package_version": __version__, "torch_version": torch.__version__,
-           "command": " ".join(sys.argv), "world_size": world, "train": [],
+           "command": _command_line(), "world_size": world, "train": [],
            "validation": [], "wall_time_s": 0.0}
     step, best_loss, best_state = 0, math.inf, None
     if ckpt_path.exists():

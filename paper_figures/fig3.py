@@ -23,6 +23,7 @@ except ImportError:
 
 def _curves(ax, err, names, numbers, key):
     t = err.trial_time.values
+    numbers["trial_time_s"] = t
     for name in names:
         m = err.euclidean.sel(estimate=name).values
         s = err.euclidean_sem.sel(estimate=name).values

@@ -171,6 +171,27 @@ def rows(fig):
                     "across < 0.3 and within > 0.7; partly: within − across > 0.2"))
 
 
+def error_table(fig):
+    """Markdown rows: each network's mean Euclidean error at 50 / 100 / 200 s beside the
+    baselines' on the same test trials (Fig. 2, 3A, 3B)."""
+    cols = ["network", "particle filter (oracle)", "single hypothesis", "path integration",
+            "naive Bayes"]
+    panels = [("localization (familiar 1 m arena, start unknown)", "fig2", "euclidean"),
+              ("generalized (novel 0.33 m arenas)", "fig3", "A_generalized_error"),
+              ("specialized (100 familiar 0.33 m arenas)", "fig3", "B_specialized_error")]
+    lines = ["| network (task) | " + " | ".join(cols) + " |",
+             "| --- |" + " --- |" * len(cols)]
+    for label, f, key in panels:
+        curves, t = _get(fig, f, key), _get(fig, f, "trial_time_s")
+        if not curves or t is None:
+            continue
+        index = [min(range(len(t)), key=lambda i: abs(t[i] - s)) for s in (50, 100, 200)]
+        cells = [" / ".join(f"{curves[c][i]:.3f}" for i in index) if c in curves else "—"
+                 for c in cols]
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--figures", default=str(ROOT / "figures"))
@@ -195,6 +216,18 @@ def main():
              "| claim (Kanitscheider & Fiete 2017) | paper | this project | verdict (rule) |",
              "| --- | --- | --- | --- |"]
     lines += [f"| {c} | {p} | {m} | {v} |" for c, p, m, v in rows(figs)]
+    table = error_table(figs)
+    if len(table) > 2:
+        lines += ["", "Mean Euclidean error (m) at 50 / 100 / 200 s on the same test trials "
+                  f"({_get(figs, 'fig2', 'n_trials')} per network):", "", *table]
+    acc = [(name, _get(figs, "fig3", key)) for name, key in
+           (("specialized network", "C_accuracy_at"),
+            ("generalized network, retrained readout", "F_readout_accuracy_at"))]
+    acc = [(n, a) for n, a in acc if a]
+    if acc:
+        lines += ["", "Arena classification accuracy at 50 / 100 / 200 s (chance 0.01): " +
+                  "; ".join(f"{n} " + " / ".join(f"{a[k]:.2f}" for k in ("50s", "100s", "200s"))
+                            for n, a in acc) + "."]
     notes = Path(a.notes)
     if notes.exists():
         lines += ["", notes.read_text()]

@@ -46,11 +46,23 @@ def test_results_table(figures, tmp_path):
                           "--figures", str(figures), "--out", str(out)],
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
-    text = out.read_text()
-    rows = [line for line in text.splitlines() if line.startswith("| ") and "---" not in line]
+    claims, errors = out.read_text().split("Mean Euclidean error (m)")
+
+    def table(text):
+        return [line for line in text.splitlines() if line.startswith("| ") and "---" not in line]
+
+    rows = table(claims)
     assert len(rows) >= 11
     measured = [row.rsplit("|", 2)[-2] for row in rows[1:]]
     assert not [m for m in measured if "n/a" in m], measured
+    # each network beside its baselines at 50 / 100 / 200 s: three numbers per cell
+    rows = table(errors)
+    assert [r.split("|")[1].split()[0] for r in rows[1:]] == ["localization", "generalized",
+                                                              "specialized"]
+    for row in rows[1:]:
+        network, pf = row.split("|")[2:4]
+        assert len(network.split("/")) == 3 and len(pf.split("/")) == 3
+    assert "Arena classification accuracy at 50 / 100 / 200 s" in errors
 
 
 def test_network_vs_rodent(tmp_path):

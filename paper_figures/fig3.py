@@ -94,9 +94,14 @@ def make(cfg, out):
         ax[4].plot(ts, slam[f"accuracy_{n}"], color=c, label=f"PF-SLAM {n:,} particles")
         numbers[f"D_pfslam_{n}_error_at"] = C.at_times(ts, slam[f"error_{n}"])
         numbers[f"E_pfslam_{n}_accuracy_at"] = C.at_times(ts, slam[f"accuracy_{n}"])
+        numbers[f"last20s_pfslam_{n}"] = {
+            "error": C.window_mean(ts, slam[f"error_{n}"]),
+            "accuracy": C.window_mean(ts, slam[f"accuracy_{n}"])}
     ax[4].plot(t, net_acc, color="k", lw=1.6, label="network")
     numbers["D_network_error_at"] = C.at_times(t, net_err)
     numbers["E_network_accuracy_at"] = C.at_times(t, net_acc)
+    numbers["last20s_network_on_slam_trials"] = {"error": C.window_mean(t, net_err),
+                                                 "accuracy": C.window_mean(t, net_acc)}
     ax[3].set_ylabel("Euclidean error (m)")
     ax[3].set_title(f"D  PF-SLAM vs network ({cfg.slam_trials} trials)")
     ax[4].set_title(f"E  PF-SLAM vs network ({cfg.slam_trials} trials)")

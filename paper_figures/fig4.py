@@ -69,12 +69,12 @@ def _maps_panel(sub, rec, title, numbers, key):
             mesh = ax.pcolormesh(img.x, img.y, (img - lo) / (hi - lo or 1.0),
                                  shading="nearest", cmap="viridis", vmin=0, vmax=1)
             v = verts.sel(environment_id=env).values
-            ax.plot(*np.vstack([v, v[:1]]).T, color="w", lw=0.8)
+            ax.plot(*np.vstack([v, v[:1]]).T, color="k", lw=0.8)
             ax.set_aspect("equal")
             ax.set_xticks([])
             ax.set_yticks([])
             if row == 0:
-                ax.set_title(["arena A, trials 1", "arena A, trials 2", "arena B"][col],
+                ax.set_title(["arena A, trial set 1", "arena A, trial set 2", "arena B"][col],
                              fontsize=7)
             if col == 0:
                 ax.set_ylabel(f"unit {int(rec.unit[u])}", fontsize=7)
@@ -82,15 +82,18 @@ def _maps_panel(sub, rec, title, numbers, key):
                  label="activity, scaled per unit (0 = min, 1 = max)").ax.tick_params(
                      labelsize=6)
     ax = fig.add_subplot(gs[:, 3])
-    bins = np.linspace(-1, 1, 21)
-    ax.hist(same[np.isfinite(same)], bins, alpha=0.7, color="k", label="A vs A")
-    ax.hist(across[np.isfinite(across)], bins, alpha=0.5, color="tab:red", label="A vs B")
+    for values, colour, label in ((same, "k", "A vs A"), (across, "tab:red", "A vs B")):
+        values = np.sort(values[np.isfinite(values)])
+        ax.plot(values, np.arange(1, len(values) + 1) / len(values), color=colour,
+                label=f"{label} (median {np.median(values):.2f})")
+        ax.axvline(np.median(values), color=colour, ls=":", lw=0.8)
     ax.set_xlabel("rate-map correlation (Pearson)", fontsize=8)
-    ax.set_ylabel("units", fontsize=8)
+    ax.set_ylabel("cumulative fraction of units", fontsize=8)
     ax.legend(frameon=False, fontsize=8)
     ax.tick_params(labelsize=7)
     ax.set_title("stability across all units", fontsize=9)
-    sub.suptitle(title, fontsize=10, x=0.02, ha="left")
+    sub.suptitle(f"{title} (the {N_EXAMPLES} most spatially selective units)", fontsize=10,
+                 x=0.02, ha="left")
     numbers[key] = {"stability_same_arena_median": float(np.nanmedian(same)),
                     "correlation_across_arenas_median": float(np.nanmedian(across)),
                     "example_units": rec.unit.values[examples]}
@@ -116,33 +119,40 @@ def make(cfg, out):
     show = np.argsort(-np.nan_to_num(mvl))[:20]
     theta = hd.direction.values
     top[1].suptitle("C  head-direction tuning of the 20 most tuned units (specialized "
-                    "network, 60 bins)", fontsize=10)
+                    "network, 60 bins;\nradius from 0 = the unit's minimum, 0° to the right)",
+                    fontsize=10)
     for k, u in enumerate(show):
         ax = top[1].add_subplot(4, 5, k + 1, projection="polar")
-        r = hd.tuning_curve.isel(unit=u).values
-        r = r - np.nanmin(r)
+        # the rate R is computed from (curve minus the unit's minimum over the recording),
+        # drawn from zero at the centre: a weakly tuned unit is a nearly round curve
+        r = hd.tuning_curve.isel(unit=u).values - float(hd.rate_offset.isel(unit=u))
         ax.plot(np.append(theta, theta[0]), np.append(r, r[0]), lw=0.8)
-        ax.set_xticks([])
+        ax.set_ylim(0, np.nanmax(r) * 1.05)
+        ax.set_xticks([0, np.pi / 2, np.pi, 3 * np.pi / 2])
+        ax.set_xticklabels([])
         ax.set_yticks([])
         ax.set_title(f"{int(many.unit[u])}: R={mvl[u]:.2f}", fontsize=6)
     numbers["C_mean_vector_length"] = {
         "median_all_units": float(np.nanmedian(mvl)),
         "max": float(np.nanmax(mvl)), "shown_units": many.unit.values[show],
-        "fraction_R_gt_0.3": float(np.mean(mvl > 0.3))}
+        "fraction_R_gt_0.3": float(np.mean(mvl > 0.3)),
+        "fraction_significant_p_lt_0.01": float(np.mean(hd.p_value.values < 0.01)),
+        "n_shuffles": int(hd.attrs["n_shuffles"])}
 
     ax = mid[1].add_subplot(1, 1, 1)
     ax.hist(mvl, bins=30, color="gray")
     ax.set_xlabel("mean vector length R (from the tuning curve)")
     ax.set_ylabel("units")
-    ax.set_title("C (cont.)  mean vector length of all units (specialized network)",
-                 fontsize=9)
+    ax.set_title("C (cont.)  R of all units (specialized network)\n"
+                 f"{np.mean(hd.p_value.values < 0.01):.0%} significant: p < 0.01 against "
+                 f"{hd.attrs['n_shuffles']} time-shift shuffles", fontsize=9)
 
     ax = bottom[0].add_subplot(1, 1, 1)
     colours = {"same": "tab:blue", "different": "tab:orange"}
     for centred, style in ((False, ":"), (True, "-")):
         sim = hp.remapping_similarity(many, center_units=centred)
         s = sim.similarity.values
-        kind = "units centred" if centred else "pooled"
+        kind = "units centred" if centred else "raw, not centred"
         for name, mask in (("same", sim.same_environment.values),
                            ("different", ~sim.same_environment.values)):
             values = np.sort(s[mask & np.isfinite(s)])
@@ -177,7 +187,9 @@ def make(cfg, out):
     inset.set_ylabel("selectivity", fontsize=7)
     inset.tick_params(labelsize=6)
     rho = ctx.attrs.get("rank_correlation")
-    inset.set_title(f"Spearman rho = {rho:.2f}", fontsize=7)
+    p = ctx.attrs.get("rank_correlation_p")
+    inset.text(0.98, 0.97, f"Spearman ρ = {rho:.2f}, p = {p:.2g}, n = {np.isfinite(sel).sum()}",
+               transform=inset.transAxes, ha="right", va="top", fontsize=7)
     numbers["E"] = {"selectivity_median": float(np.nanmedian(sel)),
                     "rank_correlation": rho,
                     "rank_correlation_p": ctx.attrs.get("rank_correlation_p")}

@@ -61,7 +61,9 @@ def make(cfg, out):
         pred = dec.prediction.sel(cov=comp).values
         ok = np.isfinite(truth) & np.isfinite(pred)
         step = max(ok.sum() // 4000, 1)
-        a.scatter(truth[ok][::step], pred[ok][::step], s=2, alpha=0.3, color="k")
+        # coloured by time in trial: the prior's broad covariance sits at the trial start
+        dots = a.scatter(truth[ok][::step], pred[ok][::step], s=2, alpha=0.4,
+                         c=loc.trial_time.values[ok][::step], cmap="viridis")
         lim = [np.nanmin(truth), np.nanmax(truth)]
         a.plot(lim, lim, color="tab:red", lw=0.8, label="identity")
         a.legend(frameon=False, fontsize=7, loc="upper left")
@@ -73,6 +75,7 @@ def make(cfg, out):
         a.set_xlabel(f"particle filter C{comp} (m²)")
         a.set_ylabel(f"decoded from units (m²)")
         numbers.setdefault("A_r2", {})[comp] = r2
+    fig.colorbar(dots, ax=ax[0, 2], label="time in trial (s)", shrink=0.8)
 
     trial = spec.trial_id.values[0]
     one = hp.select_trials(spec, trials=[trial])
@@ -91,20 +94,34 @@ def make(cfg, out):
 
     for k, (name, rec) in enumerate((("localization", loc), ("generalized", gen),
                                      ("specialized", spec))):
-        # C(r) of high-dimensional sets rises steeply: see DIMENSION_C_RANGE and
-        # DIMENSION_MIN_DECADES for the search of the scaling range
+        # C(r) of high-dimensional sets rises steeply: see DIMENSION_C_RANGE
         res = hp.correlation_dimension(rec, max_points=cfg.dimension_samples,
-                                       c_range=C.DIMENSION_C_RANGE,
-                                       min_decades=C.DIMENSION_MIN_DECADES)
+                                       c_range=C.DIMENSION_C_RANGE)
         a = ax[1, k]
         a.plot(res.log_r, res.log_c, color="k")
         lo, hi = np.log10(res.attrs["r_min"]), np.log10(res.attrs["r_max"])
         a.axvspan(lo, hi, color="tab:blue", alpha=0.15, label="scaling range")
         a.set_xlabel("log10 r")
         a.set_ylabel("log10 C(r)")
-        a.set_title(f"C  {name}: D = {res.attrs['dimension']:.2f}", fontsize=9)
-        a.legend(frameon=False, fontsize=7)
+        a.set_title(f"C  {name}: D = {res.attrs['dimension']:.2f} "
+                    f"({res.attrs['n_points']:,} states)", fontsize=9)
+        # the local slope: a plateau at D over the scaling range is what makes D a dimension
+        slope = a.twinx()
+        finite = np.isfinite(res.log_c.values) & (res.log_c.values > -np.inf)
+        lr, lc = res.log_r.values[finite], res.log_c.values[finite]
+        slope.plot(lr, np.gradient(lc, lr), color="tab:orange", lw=0.9,
+                   label="local slope")
+        d = res.attrs["dimension"]
+        if np.isfinite(d):
+            slope.axhline(d, color="tab:orange", ls=":", lw=0.8)
+        slope.set_ylim(0, 1.5 * d if np.isfinite(d) and d > 1 else 12)
+        slope.set_ylabel("d log C / d log r", color="tab:orange")
+        handles = a.get_legend_handles_labels()
+        extra = slope.get_legend_handles_labels()
+        a.legend(handles[0] + extra[0], handles[1] + extra[1], frameon=False, fontsize=7,
+                 loc="upper left")
         numbers.setdefault("C_dimension", {})[name] = float(res.attrs["dimension"])
+        numbers.setdefault("C_n_points", {})[name] = int(res.attrs["n_points"])
     a = ax[1, 3]
     p_true = _true_class_probability(spec)
     a.plot(p_true.trial_time, p_true, color="k", label="network")

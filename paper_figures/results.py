@@ -6,6 +6,7 @@ Reads the JSON files the figure scripts wrote (``figures/fig*.json``).
 """
 
 import argparse
+import math
 import json
 from pathlib import Path
 
@@ -94,25 +95,35 @@ def rows(fig):
     slam_txt = "; ".join(f"{n:,} particles: accuracy {_fmt(v.get('200s'))}, error "
                          f"{_fmt(slam_err.get(n, {}).get('200s'), '.3f')} m"
                          for n, v in slam)
-    net_acc = _get(f3, "E_network_accuracy_at", "200s")
-    best = slam[-1][1].get("200s") if slam else None
+    # 180-200 s means on the PF-SLAM trials: 50 trials make single-sample accuracies
+    # move in steps of 0.02
+    net = _get(f3, "last20s_network_on_slam_trials") or {}
+    top = _get(f3, f"last20s_pfslam_{slam[-1][0]}") if slam else None
+    acc_ok = bool(net and top) and net["accuracy"] >= 0.8 * top["accuracy"]
+    err_ok = bool(net and top) and net["error"] <= 1.25 * top["error"]
     yield ("Fig. 3D-E: the specialized network is comparable to a PF-SLAM with 10,000 "
            "particles",
            "≈ PF-SLAM 10k",
-           f"at 200 s, on {slam_n} trials — network: accuracy {_fmt(net_acc)}, error "
-           f"{_fmt(_get(f3, 'D_network_error_at', '200s'), '.3f')} m; PF-SLAM "
-           f"{slam_txt or 'n/a'}",
-           _verdict(net_acc is not None and best is not None and net_acc >= 0.8 * best,
-                    rule="network accuracy ≥ 0.8 × PF-SLAM 10k's"))
+           f"mean over 180-200 s, on {slam_n} trials — network: accuracy "
+           f"{_fmt(net.get('accuracy'))}, error {_fmt(net.get('error'), '.3f')} m; "
+           f"PF-SLAM 10k: accuracy {_fmt((top or {}).get('accuracy'))}, error "
+           f"{_fmt((top or {}).get('error'), '.3f')} m. At 200 s: PF-SLAM {slam_txt or 'n/a'}",
+           _verdict(acc_ok and err_ok, acc_ok or err_ok,
+                    "accuracy ≥ 0.8 × and error ≤ 1.25 × PF-SLAM 10k's; partly: one of "
+                    "the two"))
 
     dims = {k: v for k, v in (_get(f5, "C_dimension") or {}).items() if v is not None}
     paper = {"localization": 5.5, "generalized": 5.6, "specialized": 8.5}
     close = [abs(dims[k] / v - 1) <= 0.2 for k, v in paper.items() if k in dims]
     ordered = bool(dims) and max(dims, key=dims.get) == "specialized"
+    n_dim = min((_get(f5, "C_n_points") or {}).values(), default=None)
+    bound = 2 * math.log10(n_dim) if n_dim else None
     yield ("Fig. 5C: correlation dimension of the hidden-state trajectories",
            "5.5 / 5.6 / 8.5 (localization / generalized / specialized, as the project "
-           "brief maps them; the SI is unavailable)",
-           " / ".join(f"{k} {_fmt(v, '.1f')}" for k, v in dims.items()) or "n/a",
+           "brief maps them; the SI is unavailable to check)",
+           (" / ".join(f"{k} {_fmt(v, '.1f')}" for k, v in dims.items()) or "n/a")
+           + (f" ({n_dim:,} states each; values near 2 log10 N = {bound:.1f} "
+              "(Eckmann & Ruelle 1992) are lower bounds)" if bound else ""),
            _verdict(bool(close) and all(close), ordered,
                     "each within 20%; partly: the specialized network highest"))
 
@@ -127,8 +138,9 @@ def rows(fig):
               if r2_t else ""),
            _verdict(bool(gain) and min(r2.get("xx", 0), r2.get("yy", 0)) >= 0.5
                     and min(gain) >= 0.1,
-                    bool(r2) and max(r2.values()) >= 0.3,
-                    "R² ≥ 0.5 for xx and yy, ≥ 0.1 above time in trial alone"))
+                    any(r2[k] - r2_t.get(k, 0.0) >= 0.05 for k in r2),
+                    "R² ≥ 0.5 for xx and yy, ≥ 0.1 above time in trial alone; partly: "
+                    "≥ 0.05 above it for one component"))
 
     rho, p = _get(f4, "E", "rank_correlation"), _get(f4, "E", "rank_correlation_p")
     yield ("Fig. 4E: units projecting strongly onto the classifier are less spatially "
@@ -139,11 +151,13 @@ def rows(fig):
                     rho is not None and rho < 0, "rho < 0 with p < 0.05; partly: rho < 0"))
 
     mvl = _get(f4, "C_mean_vector_length", "median_all_units")
+    sig = _get(f4, "C_mean_vector_length", "fraction_significant_p_lt_0.01")
     yield ("Fig. 4C: head-direction tuning is weak",
            "weak",
-           f"median mean vector length {_fmt(mvl)}, max "
-           f"{_fmt(_get(f4, 'C_mean_vector_length', 'max'))} (mouse ADn: 0.84, see the "
-           f"network-vs-rodent table)",
+           f"specialized network: median mean vector length {_fmt(mvl)}, max "
+           f"{_fmt(_get(f4, 'C_mean_vector_length', 'max'))}; "
+           f"{_fmt(sig)} of units significant (p < 0.01, time-shift shuffles): tuned, "
+           "but weakly (mouse ADn cells: median R 0.84, see the network-vs-rodent table)",
            _verdict(mvl is not None and mvl < 0.2, rule="median R < 0.2"))
 
     same_a, same_b = (_get(f4, k, "stability_same_arena_median") for k in "AB")
@@ -153,22 +167,31 @@ def rows(fig):
            f"median rate-map correlation, same arena vs other arena: specialized "
            f"{_fmt(same_a)} vs {_fmt(across_a)}, generalized {_fmt(same_b)} vs "
            f"{_fmt(across_b)}",
-           _verdict(same_a is not None and same_a >= 0.7 and (same_b or 0) >= 0.7,
-                    rule="same-arena median ≥ 0.7"))
+           _verdict(same_a is not None and same_a >= 0.7 and (same_b or 0) >= 0.7
+                    and across_a is not None and same_a - across_a >= 0.1,
+                    same_a is not None and same_a >= 0.7,
+                    "same-arena median ≥ 0.7 and ≥ 0.1 above the other arena's for the "
+                    "specialized network; partly: stable only. Smooth gradient-like maps "
+                    "are stable trivially (notes)"))
 
     d = _get(f4, "D_similarity") or {}
     dc = _get(f4, "D_similarity_units_centred") or {}
     within, across = dc.get("same"), dc.get("different")
+    # global remapping = units' maps unrelated across arenas, not only the population
+    # vectors: the per-unit rate-map correlation across arenas (Fig. 4A) must be low too
+    pv_ok = across is not None and within is not None and across < 0.3 and within > 0.7
+    maps_ok = across_a is not None and across_a < 0.5
     yield ("Fig. 4D: global remapping between arenas",
            "across ≈ 0, within high",
            f"mean population-vector correlation, each unit's mean removed: within "
            f"{_fmt(within)}, across {_fmt(across)} (labels shuffled: "
            f"{_fmt(dc.get('same_permuted'))} / {_fmt(dc.get('different_permuted'))}); "
-           f"pooled without centring: {_fmt(d.get('same'))} / {_fmt(d.get('different'))}",
-           _verdict(across is not None and within is not None and across < 0.3
-                    and within > 0.7,
-                    across is not None and within is not None and within - across > 0.2,
-                    "across < 0.3 and within > 0.7; partly: within − across > 0.2"))
+           f"pooled without centring: {_fmt(d.get('same'))} / {_fmt(d.get('different'))}; "
+           f"but single units' rate maps across arenas correlate {_fmt(across_a)} (median)",
+           _verdict(pv_ok and maps_ok, pv_ok,
+                    "population vectors across < 0.3 and within > 0.7, and units' maps "
+                    "across arenas < 0.5; partly: population vectors only, i.e. rate "
+                    "remapping (units change their mean rate by arena, keep their map)"))
 
 
 def error_table(fig):

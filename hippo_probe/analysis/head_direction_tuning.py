@@ -91,6 +91,8 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     -------
     xarray.Dataset
         ``tuning_curve`` (unit, [group], direction) with coord ``occupancy`` (s);
+        ``rate_offset`` (unit): what was subtracted from the curve to make it a
+        non-negative rate before the mean vector (signed activity: the unit's minimum);
         ``mean_vector_length``, ``preferred_direction`` (rad); with shuffles,
         ``p_value`` = (1 + k) / (1 + n) for k of n shuffled lengths at least the observed
         one, and ``shuffle_r95`` (the shuffles' 95th percentile); ``rayleigh_p`` (spike
@@ -159,6 +161,8 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     out = xr.Dataset(coords=coords)
     out["tuning_curve"] = (lead + ("direction",), squeeze(curves[0]),
                            {"units": units, "long_name": long_name})
+    out["rate_offset"] = ("unit", offset, {
+        "units": units, "long_name": "activity subtracted before the mean vector"})
     out["mean_vector_length"] = (lead, squeeze(length[0]), {
         "units": "1", "long_name": "mean vector length"})
     out["preferred_direction"] = (lead, squeeze(phase[0]), {

@@ -66,6 +66,9 @@ def test_signed_activity_shifted_and_stated():
     a = hp.head_direction_tuning(rec, n_shuffles=0)
     b = hp.head_direction_tuning(signed, n_shuffles=0)
     assert "minimum over the recording" in b.attrs["rate_offset"]
+    # the offset itself is returned, per unit: the signed activity's minimum
+    np.testing.assert_allclose(b.rate_offset, signed.activity.min("time"), rtol=1e-6)
+    np.testing.assert_array_equal(a.rate_offset, 0.0)       # spike-like: nothing removed
     # (2a - 1) - min(2a - 1) = 2 (a - min a): the same R as a - min a
     shifted = rec.copy()
     shifted["activity"] = rec.activity - rec.activity.min("time")

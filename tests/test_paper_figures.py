@@ -75,3 +75,18 @@ def test_network_vs_rodent(tmp_path):
     assert table["mouse ADn"]["median_mvl"] > 0.8
     assert table["mouse CA1"]["median_mvl"] < 0.56
     assert table["network (localization)"]["units"] == 256
+
+
+@pytest.mark.slow
+def test_arena_probe(tmp_path):
+    run = subprocess.run([sys.executable, str(ROOT / "analyses" / "arena_probe.py"),
+                          "--train-trials", "40", "--test-trials", "10", "--networks",
+                          "specialized", "--out", str(tmp_path)], capture_output=True,
+                         text=True, cwd=ROOT, timeout=900)
+    assert run.returncode == 0, run.stderr[-3000:]
+    res = json.loads((tmp_path / "arena_probe.json").read_text())["results"]
+    cells = [cell for by_c in res["specialized"].values() for cell in by_c.values()]
+    assert len(cells) == 9 and all(0 <= c["test"] <= 1 for c in cells)
+    # the positive control: a probe of the specialized network separates the training
+    # trials' arenas far above chance (0.01)
+    assert max(c["train"] for c in cells) > 0.5

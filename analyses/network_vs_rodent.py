@@ -120,9 +120,9 @@ def main():
               "row; the fraction significant against 100 circular time-shift shuffles is "
               "the comparison across rows. Skaggs information is in bits per spike for the "
               "mouse and bits per unit of (min-shifted) activity for the network, and "
-              "selectivity (variance explained by position) of ~8 ms spike counts (120 Hz samples) is capped "
-              "by Poisson noise while the network's h is noise-free — a higher value for "
-              "the network does not make its units 'more spatial' than CA1 cells."]
+              "selectivity (variance explained by position) of ~8 ms spike counts (120 Hz "
+              "samples) is capped by Poisson noise while the network's h is noise-free — "
+              "a higher value for the network does not make its units 'more spatial' than CA1 cells."]
     (out / "network_vs_rodent.md").write_text("\n".join(lines) + "\n")
     (out / "network_vs_rodent.json").write_text(json.dumps(C.jsonable(
         {"size": a.size, "table": table,

@@ -13,7 +13,6 @@ import json
 import time
 from pathlib import Path
 
-import numpy as np
 
 from hippo_probe.baselines import particle_filter
 from hippo_probe.tasks import make_trials

@@ -35,7 +35,7 @@ import os
 import shutil
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -462,7 +462,8 @@ def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0,
     first = check_nonnegative_int("first", first)
     config = config or task_config(task)
     seed = check_nonnegative_int("seed", seed)
-    root = Path(cache_dir or default_cache_dir()) / f"{task}-{split}-seed{seed}-{config.fingerprint()}"
+    name = f"{task}-{split}-seed{seed}-{config.fingerprint()}"
+    root = Path(cache_dir or default_cache_dir()) / name
     root.mkdir(parents=True, exist_ok=True)
     blocks = []
     stop = first + n_trials

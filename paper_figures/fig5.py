@@ -73,7 +73,7 @@ def make(cfg, out):
                     f"(time in trial alone: R² = {r2_time:.2f})", fontsize=9)
         numbers.setdefault("A_r2_time_in_trial_alone", {})[comp] = r2_time
         a.set_xlabel(f"particle filter C{comp} (m²)")
-        a.set_ylabel(f"decoded from units (m²)")
+        a.set_ylabel("decoded from units (m²)")
         numbers.setdefault("A_r2", {})[comp] = r2
     fig.colorbar(dots, ax=ax[0, 2], label="time in trial (s)", shrink=0.8)
 

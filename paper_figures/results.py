@@ -234,7 +234,8 @@ def main():
              "Shipped networks used: " + "; ".join(
                  f"{k}: {v['steps_done']} of {v['steps_budget']} steps"
                  f"{'' if v.get('finished') else ' (training not finished)'}"
-                 f"{'' if not v.get('base_network_steps') else ' on a base network of ' + str(v['base_network_steps']) + ' steps'}"
+                 + (f" on a base network of {v['base_network_steps']} steps"
+                    if v.get("base_network_steps") else "")
                  for k, v in nets.items()), "",
              "| claim (Kanitscheider & Fiete 2017) | paper | this project | verdict (rule) |",
              "| --- | --- | --- | --- |"]

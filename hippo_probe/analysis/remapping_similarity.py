@@ -47,7 +47,7 @@ def pair_correlations(maps, min_common):
 
 def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, extent=None,
                          min_common_bins=None, seed=None, center_units=False):
-    """Population-vector correlation of trial pairs in the same vs different environments.
+    r"""Population-vector correlation of trial pairs in the same vs different environments.
 
     For trials *a* and *b*, the population vector is the concatenation of all units'
     per-trial rate maps over the bins both trials visited, and

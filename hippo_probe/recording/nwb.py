@@ -18,13 +18,12 @@ from pathlib import Path
 import numpy as np
 
 from .._validators import check_option
-from .._version import __version__
 from ..errors import RecordingError
 from .arrays import LENGTH_UNITS, bin_spikes, check_time, wrap_angle
 from .config import DEFAULTS
 from .layout import assemble, trial_blocks
-from .schema import VARIABLES, annotate
-from .validate import _v, validate
+from .schema import annotate
+from .validate import validate
 
 #: NWB ``unit`` strings of lengths -> the keys of :data:`LENGTH_UNITS`.
 NWB_LENGTH_UNITS = {

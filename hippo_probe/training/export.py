@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import torch
 
 from ..pretrained import HERE
 from .checkpoint import load, save_atomic

@@ -6,7 +6,8 @@ import sys
 import torch
 
 ARGS = ["--task", "specialized", "--trials", "32", "--steps", "3", "--batch-size", "8",
-        "--hidden-size", "8", "--validate-every", "3", "--validation-trials", "8", "--test-trials", "8",
+        "--hidden-size", "8", "--validate-every", "3", "--validation-trials", "8",
+        "--test-trials", "8",
         "--threads", "1", "--no-progress"]
 
 

@@ -74,7 +74,7 @@ def plot(results, threads, path, title):
     import numpy as np
 
     names = list(results[threads[0]])
-    fig, ax = plt.subplots(figsize=(7, 3.6), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(7, 3.9), constrained_layout=True)
     width = 0.8 / len(names)
     for k, name in enumerate(names):
         xs = np.arange(len(threads)) + (k - (len(names) - 1) / 2) * width
@@ -87,7 +87,9 @@ def plot(results, threads, path, title):
     ax.set_xticks(np.arange(len(threads)), [f"{t} thread{'s' * (t > 1)}" for t in threads])
     ax.set_ylabel("median time per training step (s)")
     ax.set_title(title, fontsize=9)
-    ax.legend(frameon=False, fontsize=8, loc="lower right")
+    ax.set_ylim(0, 1.12 * max(r[1] for t in threads for r in results[t].values()))
+    ax.legend(frameon=False, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.1),
+              ncol=len(names))  # below the axes: never over a bar
     fig.savefig(path, dpi=130)
     print(f"saved {path}")
 

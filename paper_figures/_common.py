@@ -225,7 +225,8 @@ def network_info() -> dict:
         info[p.name.removesuffix(".log.json")] = {
             "steps_done": log.get("steps_done"), "steps_budget": log["config"]["steps"],
             "finished": log.get("finished"), "wall_time_s": log.get("wall_time_s"),
-            "base_network_steps": (log.get("base_network") or {}).get("steps_done")}
+            "base_network_steps": (log.get("base_network") or {}).get("steps_done"),
+            "base_network": (log.get("base_network") or {}).get("init_from")}
     return info
 
 

@@ -7,6 +7,7 @@ Reads the JSON files the figure scripts wrote (``figures/fig*.json``).
 
 import argparse
 import math
+import re
 import json
 from pathlib import Path
 
@@ -234,7 +235,8 @@ def main():
              "Shipped networks used: " + "; ".join(
                  f"{k}: {v['steps_done']} of {v['steps_budget']} steps"
                  f"{'' if v.get('finished') else ' (training not finished)'}"
-                 + (f" on a base network of {v['base_network_steps']} steps"
+                 + (f" after {v['base_network_steps']} steps of the base network "
+                    f"{v.get('base_network') or ''}".rstrip()
                     if v.get("base_network_steps") else "")
                  for k, v in nets.items()), "",
              "| claim (Kanitscheider & Fiete 2017) | paper | this project | verdict (rule) |",
@@ -254,7 +256,11 @@ def main():
                             for n, a in acc) + "."]
     notes = Path(a.notes)
     if notes.exists():
-        lines += ["", notes.read_text()]
+        text = notes.read_text()
+        unfilled = sorted(set(re.findall(r"\{[A-Z_]+\}", text)))
+        if unfilled:
+            raise SystemExit(f"{notes} has unfilled placeholders {unfilled}")
+        lines += ["", text]
     Path(a.out).write_text("\n".join(lines) + "\n")
     print(f"wrote {a.out}")
 

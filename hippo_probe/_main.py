@@ -11,13 +11,15 @@ def add_commands(sub):
     p = sub.add_parser("main", help="the README's main job: world statistics and every "
                                     "paper figure, into one folder")
     p.add_argument("--out", default="figures", help="output folder (default: figures/)")
-    p.add_argument("--size", default="full", choices=["tiny", "full", "paper"])
+    p.add_argument("--size", default="paper", choices=["tiny", "full", "paper"],
+                   help="default paper: the study's scale (1,000 test trials)")
     p.set_defaults(run=_main)
     f = sub.add_parser("figures", help="regenerate the paper figures and RESULTS.md")
     f.add_argument("--out", default="figures")
     f.add_argument("--size", default="full", choices=["tiny", "full", "paper"],
-                   help="full: about 5 minutes on 2 cores from scratch; paper: the "
-                        "study's scale, 1,000 trials (tens of minutes, not timed here)")
+                   help="full: 200 test trials, about 2 minutes from scratch on 2 cores; "
+                        "paper: the study's scale, 1,000 test trials and PF-SLAM on 100 "
+                        "(about 4 minutes); tiny: a smoke test")
     f.add_argument("--only", nargs="*", choices=FIGURES, default=None)
     f.set_defaults(run=_figures)
 

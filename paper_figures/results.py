@@ -75,7 +75,7 @@ def rows(fig):
     yield ("Fig. 3C: the specialized network identifies its arena (of 100) with accuracy "
            "near 100% within 200 s",
            "≈ 100% by 200 s",
-           "accuracy at 50/100/200 s = " + (", ".join(_fmt(v) for v in acc.values())
+           "accuracy at 50/100/200 s = " + (", ".join(_fmt(v, ".3f") for v in acc.values())
                                              if acc else "n/a") + f" (chance 0.01; {n3} trials)",
            _verdict(a200 is not None and a200 >= 0.9, a200 is not None and a200 >= 0.5,
                     "≥ 0.9 at 200 s; partly ≥ 0.5"))

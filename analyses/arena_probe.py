@@ -32,10 +32,9 @@ TIMES_S = (50, 100, 200)
 C_VALUES = (0.01, 1.0, 100.0)      # strong to almost no L2 penalty (standardized units)
 
 
-def hidden_states(network, split, n_trials, seed=0):
-    """(T, B, H) hidden states of ``network`` on specialized-task trials, and labels."""
+def hidden_states(net, split, n_trials, seed=0):
+    """(T, B, H) hidden states of a loaded network on specialized-task trials, and labels."""
     trials = make_trials("specialized", n_trials, split, seed)
-    net = hp.load_pretrained(network)
     with torch.no_grad():
         _, _, h = net(torch.from_numpy(trials.inputs))
     return h.numpy(), np.asarray(trials.environment), trials
@@ -66,8 +65,9 @@ def main():
              + " |", "| --- | --- |" + " --- |" * len(TIMES_S)]
     for network in a.networks:
         t0 = time.time()
-        h_train, y_train, trials = hidden_states(network, "train", a.train_trials)
-        h_test, y_test, _ = hidden_states(network, "test", a.test_trials)
+        net = hp.load_pretrained(network)
+        h_train, y_train, trials = hidden_states(net, "train", a.train_trials)
+        h_test, y_test, _ = hidden_states(net, "test", a.test_trials)
         dt = trials.dt
         results[network] = {}
         for c in C_VALUES:

@@ -107,7 +107,7 @@ def make(cfg, out):
                     f"({res.attrs['n_points']:,} states)", fontsize=9)
         # the local slope: a plateau at D over the scaling range is what makes D a dimension
         slope = a.twinx()
-        finite = np.isfinite(res.log_c.values) & (res.log_c.values > -np.inf)
+        finite = np.isfinite(res.log_c.values)
         lr, lc = res.log_r.values[finite], res.log_c.values[finite]
         slope.plot(lr, np.gradient(lc, lr), color="tab:orange", lw=0.9,
                    label="local slope")

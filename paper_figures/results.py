@@ -6,9 +6,9 @@ Reads the JSON files the figure scripts wrote (``figures/fig*.json``).
 """
 
 import argparse
+import json
 import math
 import re
-import json
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]

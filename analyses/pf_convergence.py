@@ -27,11 +27,12 @@ def main():
     ap.add_argument("--particles", type=int, nargs="+", default=[1000, 10000])
     ap.add_argument("--tasks", nargs="+",
                     default=["localization", "generalized", "specialized"])
+    ap.add_argument("--world", default="darkness", choices=["darkness", "compass"])
     ap.add_argument("--out", default=str(ROOT / "figures"))
     a = ap.parse_args()
     rows, table = [], {}
     for task in a.tasks:
-        batch = make_trials(task, a.trials, "test", 0)
+        batch = make_trials(task, a.trials, "test", 0, world=a.world)
         for n in a.particles:
             t0 = time.time()
             err = particle_filter(batch, n).error(batch).mean(axis=1)   # (T,) over trials

@@ -42,9 +42,9 @@ import numpy as np
 
 from ._validators import check_nonnegative_int, check_option
 from .world.arena import fan_points, fan_weights, random_vertices, wall_distance
-from .world.config import FEATURES, ArenaConfig, WorldConfig
+from .world.config import FEATURES, ArenaConfig, WorldConfig, world_config
 from .world.motion import simulate_motion
-from .world.sensors import N_NOISE_DRAWS, sense
+from .world.sensors import N_NOISE_DRAWS, heading_drift, sense
 
 TASKS = ("localization", "generalized", "specialized")
 SPLITS = ("train", "validation", "test")
@@ -63,6 +63,7 @@ class TaskConfig:
     ----------
     name : str
     world : WorldConfig
+        The world (``"darkness"`` by default, or ``"compass"``; :func:`world_config`).
     arenas : {"fixed", "novel"}
         ``fixed``: ``n_arenas`` arenas drawn once from :data:`ARENA_SEED`; ``novel``: a new
         random arena every trial.
@@ -105,31 +106,67 @@ class TaskConfig:
         return hashlib.sha1(repr((self, ARENA_SEED, _FORMAT_VERSION)).encode()).hexdigest()[:10]
 
 
-_FORMAT_VERSION = 1
+_FORMAT_VERSION = 2  # 2: blocks hold `heading_drift`; names carry the world
+
+#: Mean arena radius (m) of each task: 1 m for localization, 0.33 m for the generalized
+#: and specialized tasks (the study's Fig. 2-3).
+TASK_ARENA_RADIUS = {"localization": 1.0, "generalized": 0.33, "specialized": 0.33}
 
 
-def task_config(task: str, **overrides) -> TaskConfig:
-    """The default :class:`TaskConfig` of a task, optionally with fields replaced.
+def task_config(task: str, world="darkness", **overrides) -> TaskConfig:
+    """The default :class:`TaskConfig` of a task in a world, optionally with fields
+    replaced.
+
+    Parameters
+    ----------
+    task : {"localization", "generalized", "specialized"}
+    world : {"darkness", "compass"} or WorldConfig
+        A named world gets the task's arena size; a :class:`WorldConfig` is used exactly
+        as given (its arenas too).
+    **overrides
+        Fields of :class:`TaskConfig` to replace.
 
     Examples
     --------
     >>> task_config("generalized").world.arena.mean_radius
     0.33
+    >>> task_config("generalized", "compass").world.noise.heading_drift
+    0.0
     """
     check_option("task", task, TASKS)
-    small = ArenaConfig(mean_radius=0.33)
+    world = world_config(world, arena=ArenaConfig(mean_radius=TASK_ARENA_RADIUS[task]))
     defaults = {
-        "localization": TaskConfig("localization", WorldConfig(arena=ArenaConfig(mean_radius=1.0)),
-                                   arenas="fixed", n_arenas=1, start="uniform",
-                                   target="arena", classify=False, train_trials=5000),
-        "generalized": TaskConfig("generalized", WorldConfig(arena=small), arenas="novel",
-                                  n_arenas=0, start="uniform", target="start_relative",
-                                  classify=False, train_trials=300_000),
-        "specialized": TaskConfig("specialized", WorldConfig(arena=small), arenas="fixed",
-                                  n_arenas=100, start="centre", target="arena",
-                                  classify=True, train_trials=250_000),
+        "localization": TaskConfig("localization", world, arenas="fixed", n_arenas=1,
+                                   start="uniform", target="arena", classify=False,
+                                   train_trials=5000),
+        "generalized": TaskConfig("generalized", world, arenas="novel", n_arenas=0,
+                                  start="uniform", target="start_relative", classify=False,
+                                  train_trials=300_000),
+        "specialized": TaskConfig("specialized", world, arenas="fixed", n_arenas=100,
+                                  start="centre", target="arena", classify=True,
+                                  train_trials=250_000),
     }[task]
     return replace(defaults, **overrides) if overrides else defaults
+
+
+def resolve_config(task: str, world=None, config: TaskConfig | None = None) -> TaskConfig:
+    """The :class:`TaskConfig` a call means: ``config`` if given (its world must agree
+    with ``world`` if that is given too), else ``task_config(task, world or "darkness")``."""
+    check_option("task", task, TASKS)
+    if config is None:
+        return task_config(task, "darkness" if world is None else world)
+    if not isinstance(config, TaskConfig):
+        raise TypeError(f"`config` must be a TaskConfig; got {config!r}")
+    if config.name != task:
+        raise ValueError(f"`config` is for task {config.name!r}; got task={task!r}")
+    if world is not None and world_config(world, arena=config.world.arena) != config.world:
+        raise ValueError(f"`world` ({_world_label(world)}) disagrees with the world of "
+                         f"`config` ({_world_label(config.world)})")
+    return config
+
+
+def _world_label(world) -> str:
+    return repr(world) if isinstance(world, str) else f"{world.name!r}: {world!r}"
 
 
 @functools.lru_cache(maxsize=8)
@@ -169,6 +206,9 @@ class TrialBatch:
         Start position, arena frame (m).
     head_direction : (T, B)
         True head direction at the end of each step, rad in [-pi, pi).
+    heading_drift : (T, B)
+        True drift of the sensed heading at the end of each step, rad (sensed minus true
+        heading, before the independent noise; zeros in the compass world).
     contact : bool (T, B)
         Whether the step had a boundary contact.
     environment : int (B,)
@@ -180,6 +220,9 @@ class TrialBatch:
         Network step (s).
     task, split : str
     seed : int
+    config : TaskConfig
+        The whole task and world configuration that made the batch: baselines,
+        recordings and the trial cache read the world from here.
     features : tuple of str
     """
 
@@ -188,6 +231,7 @@ class TrialBatch:
     position: np.ndarray
     start: np.ndarray
     head_direction: np.ndarray
+    heading_drift: np.ndarray
     contact: np.ndarray
     environment: np.ndarray
     arena_vertices: np.ndarray
@@ -196,6 +240,7 @@ class TrialBatch:
     task: str
     split: str
     seed: int
+    config: TaskConfig
     features: tuple = FEATURES
 
     def __len__(self) -> int:
@@ -204,6 +249,33 @@ class TrialBatch:
     @property
     def n_steps(self) -> int:
         return self.inputs.shape[0]
+
+    @property
+    def world(self) -> WorldConfig:
+        """The world of the batch (``self.config.world``)."""
+        return self.config.world
+
+    def checked_config(self, config: TaskConfig | None = None) -> TaskConfig:
+        """The batch's own configuration; an explicitly given ``config`` must be it.
+
+        Whatever inverts or records the batch (baselines, recordings) reads the world
+        from here, never from a default rebuilt elsewhere: a filter built for another
+        world than the one that made the trials would be silently wrong.
+        """
+        own = self.config
+        if config is None:
+            return own
+        if not isinstance(config, TaskConfig):
+            raise TypeError(f"`config` must be a TaskConfig; got {config!r}")
+        if config.name != self.task:
+            raise ValueError(f"`config` is for task {config.name!r}; got a {self.task!r} "
+                             f"batch")
+        if config != own:
+            raise ValueError(
+                f"`config` disagrees with the configuration the batch was made with: given "
+                f"world {config.world.name!r} {config.world!r}; the batch's world "
+                f"{own.world.name!r} {own.world!r}. Leave `config` out to use the batch's.")
+        return config
 
     @property
     def time(self) -> np.ndarray:
@@ -230,9 +302,13 @@ class TrialBatch:
 
     @classmethod
     def concatenate(cls, batches) -> "TrialBatch":
-        """Join batches of the same task/split along the trial axis."""
+        """Join batches of the same task/split/world along the trial axis."""
         batches = list(batches)
         first = batches[0]
+        for other in batches[1:]:
+            if other.config != first.config:
+                raise ValueError(f"batches of different configurations cannot be joined: "
+                                 f"{first.config!r} and {other.config!r}")
         out = {}
         for f in fields(cls):
             values = [getattr(b, f.name) for b in batches]
@@ -245,12 +321,14 @@ class TrialBatch:
         return cls(**out)
 
 
-_TIME_MAJOR = ("inputs", "target", "position", "head_direction", "contact")
+_TIME_MAJOR = ("inputs", "target", "position", "head_direction", "heading_drift",
+               "contact")
 _TRIAL_MAJOR = ("start", "environment", "arena_vertices", "trial_index")
 
 
 def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *,
-                first: int = 0, config: TaskConfig | None = None) -> TrialBatch:
+                first: int = 0, world=None, config: TaskConfig | None = None
+                ) -> TrialBatch:
     """Generate trials ``first, ..., first + n_trials - 1`` of a task's split.
 
     Parameters
@@ -264,9 +342,13 @@ def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *
     first : int
         Index of the first trial, so ``make_trials(..., 10, first=0)`` equals
         ``make_trials(..., 5, first=0)`` joined with ``make_trials(..., 5, first=5)``.
+    world : {"darkness", "compass"} or WorldConfig, optional
+        The world (default ``"darkness"``, the study's). The compass world's trials are
+        those of this project's first world, bit for bit; a darkness trial shares every
+        random number with the compass trial of the same index and adds its drift.
     config : TaskConfig, optional
         A modified task (e.g. ``task_config("generalized", world=...)`` for a noiseless
-        world); defaults to :func:`task_config(task) <task_config>`.
+        world); defaults to :func:`task_config(task, world) <task_config>`.
 
     Returns
     -------
@@ -277,9 +359,7 @@ def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *
     n_trials = check_nonnegative_int("n_trials", n_trials)
     first = check_nonnegative_int("first", first)
     seed = check_nonnegative_int("seed", seed)
-    config = config or task_config(task)
-    if config.name != task:
-        raise ValueError(f"`config` is for task {config.name!r}; got task={task!r}")
+    config = resolve_config(task, world, config)
     world = config.world
     motion = world.motion
     n_steps = motion.n_steps
@@ -290,6 +370,7 @@ def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *
     inputs = np.empty((n_steps, n_trials, len(FEATURES)), dtype=np.float32)
     position = np.empty((n_steps, n_trials, 2))
     head_direction = np.empty((n_steps, n_trials))
+    drift = np.zeros((n_steps, n_trials))
     contact = np.empty((n_steps, n_trials), dtype=bool)
 
     # Chunks bound the memory of the random draws; within a chunk, threads share the
@@ -299,7 +380,7 @@ def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *
     with ThreadPoolExecutor(max_workers=workers) as pool:
         for lo in range(0, n_trials, _CHUNK):
             chunk = slice(lo, min(lo + _CHUNK, n_trials))
-            heading0, speed_noise, turn_noise, draws = _draw_trials(
+            heading0, speed_noise, turn_noise, draws, drift_draws = _draw_trials(
                 pool, workers, task, split, seed, config, trial_index[chunk], verts[chunk],
                 start[chunk], environment[chunk])
             sim = simulate_motion(verts[chunk], start[chunk], heading0, speed_noise,
@@ -308,8 +389,12 @@ def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *
             position[:, chunk] = sim["position"].transpose(1, 0, 2)
             head_direction[:, chunk] = sim["heading"].T
             contact[:, chunk] = sim["contact"].T
+            eta = heading_drift(world.noise, drift_draws, motion.network_dt)
+            if eta is not None:
+                drift[:, chunk] = eta.T
             sense_rows = functools.partial(_sense_into, inputs[:, chunk], sim=sim,
-                                           noise=world.noise, draws=draws, heading0=heading0)
+                                           noise=world.noise, draws=draws, heading0=heading0,
+                                           drift=eta)
             list(pool.map(sense_rows, _row_blocks(len(heading0), workers)))
 
     target = position - start[None] if config.target == "start_relative" else position.copy()
@@ -319,6 +404,7 @@ def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *
         position=position,
         start=start,
         head_direction=head_direction,
+        heading_drift=drift,
         contact=contact,
         environment=environment,
         arena_vertices=verts,
@@ -327,6 +413,7 @@ def make_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *
         task=task,
         split=split,
         seed=seed,
+        config=config,
     )
 
 
@@ -357,7 +444,9 @@ def _draw_trials(pool, workers, task, split, seed, config, index, verts, start, 
     the initial headings and the noise arrays. The draws of one trial come in a fixed
     order from ``trial_seed(task, split, seed, i)``: arena (novel) or arena id (fixed),
     start candidates (uniform starts, as :func:`~hippo_probe.world.arena.sample_uniform`
-    draws them), initial heading, speed noise, turning noise, sensor noise.
+    draws them), initial heading, speed noise, turning noise, sensor noise, and last,
+    only in a world with drift, the drift's increments (so every other draw, and hence
+    the compass world's trial, is the same with and without drift).
     """
     world = config.world
     motion = world.motion
@@ -367,6 +456,8 @@ def _draw_trials(pool, workers, task, split, seed, config, index, verts, start, 
     speed_noise = np.empty((n, n_fine))
     turn_noise = np.empty((n, n_fine))
     draws = np.empty((n, N_NOISE_DRAWS, motion.n_steps))
+    drifts = world.noise.heading_drift > 0
+    drift_draws = np.empty((n, motion.n_steps)) if drifts else None
     uniform = config.start == "uniform"
     triangle = np.empty((n, _START_TRIES), dtype=np.int64)
     u = np.empty((n, 2, _START_TRIES))
@@ -395,18 +486,21 @@ def _draw_trials(pool, workers, task, split, seed, config, index, verts, start, 
             rng.standard_normal(out=speed_noise[b])
             rng.standard_normal(out=turn_noise[b])
             rng.standard_normal(out=draws[b])
+            if drifts:
+                rng.standard_normal(out=drift_draws[b])
 
     list(pool.map(draw, _row_blocks(n, workers)))
     if uniform:
         candidates = fan_points(verts, triangle, u[:, 0], u[:, 1])
         start[:] = _clear_starts(verts, candidates, world.sensors.touch_range)
-    return heading0, speed_noise, turn_noise, draws
+    return heading0, speed_noise, turn_noise, draws, drift_draws
 
 
-def _sense_into(out, rows, sim, noise, draws, heading0):
+def _sense_into(out, rows, sim, noise, draws, heading0, drift):
     """Sensed inputs of trials ``rows`` of a simulation, into ``out`` (T, B, F)."""
     part = {key: value[rows] for key, value in sim.items()}
-    out[:, rows] = sense(part, noise, draws[rows], heading0[rows]).transpose(1, 0, 2)
+    out[:, rows] = sense(part, noise, draws[rows], heading0[rows],
+                         None if drift is None else drift[rows]).transpose(1, 0, 2)
 
 
 def _clear_starts(vertices, candidates, clearance) -> np.ndarray:
@@ -421,8 +515,8 @@ def _clear_starts(vertices, candidates, clearance) -> np.ndarray:
 
 # --------------------------------------------------------------------------- cache
 CACHE_CHUNK = 1000
-_CACHED_FIELDS = ("inputs", "position", "head_direction", "contact", "start",
-                  "environment", "arena_vertices", "trial_index")
+_CACHED_FIELDS = ("inputs", "position", "head_direction", "heading_drift", "contact",
+                  "start", "environment", "arena_vertices", "trial_index")
 
 
 def _write_block(zarr, batch, tmp, path) -> None:
@@ -444,15 +538,15 @@ def default_cache_dir() -> Path:
 
 
 def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0, *,
-                  first: int = 0, cache_dir=None, config: TaskConfig | None = None
-                  ) -> TrialBatch:
+                  first: int = 0, cache_dir=None, world=None,
+                  config: TaskConfig | None = None) -> TrialBatch:
     """Like :func:`make_trials`, but stored on disk (zarr) and reused.
 
     Trials are stored in blocks of :data:`CACHE_CHUNK` consecutive indices, one zarr
     group per block, each written beside and renamed into place (atomic: concurrent
-    processes and interrupted runs never see half a block). The store's name carries a
-    fingerprint of the task's configuration, so a change to the world never reuses stale
-    trials.
+    processes and interrupted runs never see half a block). The store's name carries the
+    world's name and a fingerprint of the task's whole configuration, so a change to the
+    world never reuses stale trials.
     """
     import zarr
 
@@ -460,9 +554,9 @@ def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0,
     check_option("split", split, SPLITS)
     n_trials = check_nonnegative_int("n_trials", n_trials)
     first = check_nonnegative_int("first", first)
-    config = config or task_config(task)
+    config = resolve_config(task, world, config)
     seed = check_nonnegative_int("seed", seed)
-    name = f"{task}-{split}-seed{seed}-{config.fingerprint()}"
+    name = f"{task}-{config.world.name}-{split}-seed{seed}-{config.fingerprint()}"
     root = Path(cache_dir or default_cache_dir()) / name
     root.mkdir(parents=True, exist_ok=True)
     blocks = []
@@ -494,4 +588,4 @@ def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0,
     target = data["position"] - start[None] if config.target == "start_relative" \
         else data["position"]
     return TrialBatch(target=target, dt=config.world.motion.network_dt, task=task,
-                      split=split, seed=seed, **data)
+                      split=split, seed=seed, config=config, **data)

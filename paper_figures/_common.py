@@ -45,6 +45,17 @@ class FigureConfig:
     remap_trials: int = 400      # specialized trials for remapping / selectivity
     dimension_samples: int = 20000   # Eckmann-Ruelle: D up to ~2 log10 N = 8.6 resolvable
     seed: int = 0
+    # the world of the networks and trials: the compass world's networks until the
+    # darkness world's finish training (issue 13); the trials are always of the networks'
+    # world
+    world: str = "compass"
+
+    def network(self, name: str) -> str:
+        """The shipped network ``name`` (e.g. "generalized") of this world."""
+        if self.world == "darkness":
+            return name
+        task, _, rest = name.partition("_")
+        return f"{task}_{self.world}" + (f"_{rest}" if rest else "")
 
     @property
     def cache(self) -> Path:
@@ -106,7 +117,7 @@ def baseline_estimates(batch, which, n_particles: int) -> dict:
     from hippo_probe import baselines as bl
 
     to_arena = (lambda e: e + batch.start[None]) \
-        if task_config(batch.task).target == "start_relative" else (lambda e: e)
+        if batch.config.target == "start_relative" else (lambda e: e)
     out = {}
     if "pi" in which:
         out["estimate_pi"] = to_arena(bl.path_integration(batch).estimate)
@@ -138,6 +149,7 @@ RECORDINGS = {
 def recording(name: str, cfg: FigureConfig):
     """A cached recording of the paper's data set ``name`` (see :data:`RECORDINGS`)."""
     network, task, overrides, which, size_attr = RECORDINGS[name]
+    network = cfg.network(network)
     n_trials = getattr(cfg, size_attr)
     net_path = network_file(network)
     key = _digest(net_path.read_bytes(), name, n_trials, cfg.particles, cfg.seed,
@@ -152,7 +164,10 @@ def recording(name: str, cfg: FigureConfig):
             pass            # unreadable or half-written: rebuild it
     t0 = time.time()
     net = hp.load_pretrained(net_path)
-    config = task_config(task, **overrides) if overrides else None
+    if net.world != cfg.world:
+        raise ValueError(f"network {network!r} is of the {net.world!r} world; the figures "
+                         f"are of the {cfg.world!r} world")
+    config = task_config(task, cfg.world, **overrides)
     batch = make_trials(task, n_trials, "test", cfg.seed, config=config)
     extra = baseline_estimates(batch, which, cfg.particles) if which else None
     rec = hp.record(net, batch, baselines=extra, checkpoint=network, config=config,

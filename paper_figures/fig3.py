@@ -38,7 +38,7 @@ def _curves(ax, err, names, numbers, key):
 
 
 def _slam(cfg):
-    batch = make_trials("specialized", cfg.slam_trials, "test", cfg.seed)
+    batch = make_trials("specialized", cfg.slam_trials, "test", cfg.seed, world=cfg.world)
 
     def run():
         out = {}

@@ -35,8 +35,11 @@ def test_world_stats_prints_a_row_per_task_and_saves_numbers_and_picture(world_s
                    "PI err 200 s"):
         assert column in lines[0]
     for task in TASKS:
-        (row,) = [line for line in lines if line.startswith(task)]
+        row, drift_row = [line for line in lines if line.startswith(task)]
         numbers = [float(x) for x in row.split()[1:]]
+        assert float(drift_row.split()[1]) == pytest.approx(
+            stats[task]["drift_rate_median_deg_per_min"], abs=0.05)
+        assert stats[task]["world"] == "darkness"
         assert numbers[0] == pytest.approx(stats[task]["mean_speed_m_per_s"], abs=1e-3)
         assert numbers[4] == pytest.approx(stats[task]["pi_error_200s_m"], abs=1e-3)
         assert stats[task]["n_trials"] == 120
@@ -64,8 +67,18 @@ def test_generalized_pi_error_after_200_s_is_of_the_order_of_the_arena_radius(wo
     assert 0.5 * radius < stats["pi_error_200s_m"] < 2.0 * radius
 
 
+def test_world_stats_of_the_compass_world_have_no_drift(capsys):
+    assert main(["world-stats", "--world", "compass", "--trials", "10"]) == 0
+    printed = capsys.readouterr().out
+    assert "Cheung et al. 2012" in printed and "5.1-26.6 deg/min" in printed
+    rows = [line.split() for line in printed.splitlines() if line.startswith("generalized")]
+    assert float(rows[1][1]) == 0.0
+
+
 @pytest.mark.parametrize("argv, words", [
     (["--trials", "-1"], ["`n_trials`", "-1"]),
+    (["--trials", "0"], ["`n_trials`", "0"]),
+    (["--world", "moon"], ["`world`", "'moon'", "'darkness'"]),
     (["--split", "dev"], ["`split`", "'dev'"]),
     (["--seed", "-2"], ["`seed`", "-2"]),
 ])

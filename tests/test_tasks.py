@@ -1,6 +1,7 @@
 """The three tasks: reproducible trials, disjoint splits, fixed arenas, the trial cache."""
 
 import hashlib
+import shutil
 from dataclasses import fields, replace
 
 import numba
@@ -189,6 +190,11 @@ def test_cached_trials_are_the_made_trials(task, tmp_path, small_blocks, monkeyp
 
 def test_cache_never_serves_trials_of_another_world(tmp_path, small_blocks):
     cached_trials("generalized", 4, "train", 0, cache_dir=tmp_path)
+    compass = cached_trials("generalized", 4, "train", 0, cache_dir=tmp_path, world="compass")
+    assert_same_batch(compass, make_trials("generalized", 4, "train", 0, world="compass"))
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert len(names) == 2 and "compass" in names[0] and "darkness" in names[1]
+    shutil.rmtree(tmp_path / names[0])
     config = task_config("generalized")
     quiet = replace(config, world=replace(config.world, noise=NoiseModel.noiseless()))
     got = cached_trials("generalized", 4, "train", 0, cache_dir=tmp_path, config=quiet)

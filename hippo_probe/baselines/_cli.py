@@ -7,6 +7,8 @@ def add_commands(sub):
         help="run PI, SH, NB, the particle filter (and PF-SLAM) on a task's trials")
     p.add_argument("--task", required=True,
                    help="localization, generalized or specialized")
+    p.add_argument("--world", default="darkness",
+                   help="the world of the trials: darkness (the default, the study's) or compass")
     p.add_argument("--split", default="test", help="train, validation or test (default test)")
     p.add_argument("--seed", type=int, default=0, help="seed of the split (default 0)")
     p.add_argument("--out", required=True, metavar="FILE",
@@ -18,7 +20,8 @@ def add_commands(sub):
                    help="number of trials (default: the whole split)")
     p.add_argument("--first", type=int, default=0, help="index of the first trial (default 0)")
     p.add_argument("--particles", type=int, default=None,
-                   help="particles of the oracular PF per trial (default 1000)")
+                   help="particles of the oracular PF per trial (default 1000 with a known "
+                        "start, 2000 with an unknown one)")
     p.add_argument("--slam-particles", type=int, default=None,
                    help="particles of PF-SLAM per trial, specialized task (default 10000)")
     p.add_argument("--prior-trials", type=int, default=None,
@@ -44,9 +47,10 @@ def _baselines(args):
     if out.exists() and not args.overwrite:
         raise FileExistsError(f"`--out` {str(out)!r} exists; pass --overwrite to replace it")
     n_trials = args.trials if args.trials is not None else \
-        task_config(args.task).split_size(args.split)
+        task_config(args.task, args.world).split_size(args.split)
     began = time.perf_counter()
-    batch = make_trials(args.task, n_trials, args.split, args.seed, first=args.first)
+    batch = make_trials(args.task, n_trials, args.split, args.seed, first=args.first,
+                        world=args.world)
     baseline = BaselineConfig() if args.prior_trials is None else \
         BaselineConfig(naive_bayes=NaiveBayesConfig(prior_trials=args.prior_trials))
     ds = run_baselines(batch, n_particles=args.particles, slam_particles=args.slam_particles,

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._validators import check_option
 from .._version import __version__
-from ..tasks import TaskConfig, task_config
+from ..tasks import TaskConfig
 from ..world.arena import sample_uniform, wall_distance
 from .config import STREAM_TAGS, BaselineConfig
 
@@ -30,11 +30,15 @@ class BaselineResult:
     mean, cov : (T, B, 2), (T, B, 3) or None
         Particle filters: posterior mean and covariance (``xx, yy, xy``, m²) of the
         position in the arena frame.
+    drift_mean, drift_sd : (T, B) or None
+        Particle filters: posterior mean and s.d. of the heading drift (rad; sensed minus
+        true heading, :attr:`~hippo_probe.tasks.TrialBatch.heading_drift`), unwrapped.
     class_probability : (T, B, n_arenas) float32 or None
         PF-SLAM: posterior probability of each arena.
-    particles, particle_weights : (K, B, N, 2), (K, B, N) or None
-        Particle filters asked to ``keep`` steps: the particles (arena frame) and their
-        normalized weights after the update of each kept step (before resampling).
+    particles, particle_weights, particle_drifts : (K, B, N, 2), (K, B, N), (K, B, N)
+        Particle filters asked to ``keep`` steps: the particles (arena frame), their
+        normalized weights and drift hypotheses after the update of each kept step
+        (before resampling); None otherwise.
     particle_arenas : (K, B, N) int or None
         PF-SLAM: the arena hypothesis of each kept particle.
     attrs : dict
@@ -45,9 +49,12 @@ class BaselineResult:
     estimate: np.ndarray
     mean: np.ndarray | None = None
     cov: np.ndarray | None = None
+    drift_mean: np.ndarray | None = None
+    drift_sd: np.ndarray | None = None
     class_probability: np.ndarray | None = None
     particles: np.ndarray | None = None
     particle_weights: np.ndarray | None = None
+    particle_drifts: np.ndarray | None = None
     particle_arenas: np.ndarray | None = None
     attrs: dict = field(default_factory=dict)
 
@@ -57,11 +64,10 @@ class BaselineResult:
 
 
 def resolve_task(batch, config: TaskConfig | None) -> TaskConfig:
-    """The task configuration that generated ``batch`` (default: its task's defaults)."""
-    config = config or task_config(batch.task)
-    if config.name != batch.task:
-        raise ValueError(f"`config` is for task {config.name!r}; got a {batch.task!r} batch")
-    return config
+    """The task configuration that generated ``batch``
+    (:meth:`~hippo_probe.tasks.TrialBatch.checked_config`): every baseline inverts the
+    world the trials were made in."""
+    return batch.checked_config(config)
 
 
 def resolve_start(start: str | None, config: TaskConfig) -> str:

@@ -272,36 +272,37 @@ def _normal_mass(lo, hi):
     return 0.5 * (math.erfc(-hi / _SQRT2) - math.erfc(-lo / _SQRT2))
 
 
-@numba.njit(cache=True, nogil=True)
-def contact_terms(walls, heading, angle, path_length, angle_obs_var, angle_wall_var,
-                  distance_var, path_length_error, cutoff, weight, reach, sd):
-    r"""Per wall of every arena (``walls (A, V, 8)``), the terms of a contact step's
-    likelihood (module docstring), into ``(A, V)`` arrays: the angle likelihood ``weight``
-    (zero beyond ``cutoff`` s.d.), the V's depth ``reach`` :math:`\hat\ell|\cos\hat\beta_k|`
-    and the s.d. :math:`\sigma_k` of the contact distance."""
+@numba.njit(cache=True, nogil=True, inline="always")
+def wall_terms(normal_angle, heading, angle, path_length, angle_obs_var, angle_wall_var,
+               distance_var, path_length_error, cutoff):
+    r"""The terms of a contact step's likelihood for one wall (module docstring), given the
+    heading ``h`` the wall's predicted angle is computed from: the angle likelihood
+    ``weight`` (zero beyond ``cutoff`` s.d.), the V's depth ``reach``
+    :math:`\hat\ell|\cos\hat\beta_k|` and the s.d. :math:`\sigma_k` of the contact
+    distance. Returns ``(weight, reach, sd)``; ``(0, 0, 1)`` for a wall beyond the cutoff.
+
+    In the darkness world a particle's heading is the sensed one minus its drift
+    hypothesis, so the particle filters call this per particle."""
     total_var = angle_obs_var + angle_wall_var
     angle_sd = math.sqrt(total_var)
-    norm = 1.0 / (_SQRT2PI * angle_sd)
+    error = _wrap(angle - (normal_angle + math.pi - heading))
+    z = error / angle_sd
+    if abs(z) > cutoff:
+        return 0.0, 0.0, 1.0
+    weight = math.exp(-0.5 * z * z) / (_SQRT2PI * angle_sd)
     share = angle_wall_var / total_var
     beta_var = angle_obs_var * angle_wall_var / total_var
-    for a in range(walls.shape[0]):
-        for k in range(walls.shape[1]):
-            error = _wrap(angle - (walls[a, k, 7] + math.pi - heading))
-            z = error / angle_sd
-            weight[a, k] = norm * math.exp(-0.5 * z * z) if abs(z) <= cutoff else 0.0
-            beta = angle - share * error
-            c, s = abs(math.cos(beta)), math.sin(beta)
-            reach[a, k] = path_length * c
-            spread = path_length_error ** 2 * c * c + beta_var * s * s
-            sd[a, k] = math.sqrt(distance_var + 0.25 * path_length ** 2 * spread)
+    beta = angle - share * error
+    c, s = abs(math.cos(beta)), math.sin(beta)
+    spread = path_length_error ** 2 * c * c + beta_var * s * s
+    return weight, path_length * c, math.sqrt(distance_var + 0.25 * path_length ** 2 * spread)
 
 
-@numba.njit(cache=True, nogil=True)
-def towards_probability(walls, heading, heading_sd, out):
-    """Probability that the true heading points into each wall (``cos(theta - phi_k) < 0``)
-    given the sensed ``heading`` with normal noise ``heading_sd``, into ``out (A, V)``."""
-    n_arenas, n_walls = walls.shape[0], walls.shape[1]
-    for a in range(n_arenas):
-        for k in range(n_walls):
-            alpha = abs(_wrap(heading - walls[a, k, 7]))
-            out[a, k] = _normal_cdf((alpha - 0.5 * math.pi) / heading_sd)
+@numba.njit(cache=True, nogil=True, inline="always")
+def towards(normal_angle, heading, heading_sd):
+    """Probability that the true heading points into a wall (``cos(theta - phi_k) < 0``)
+    given a heading estimate ``heading`` with normal noise ``heading_sd``."""
+    alpha = abs(_wrap(heading - normal_angle))
+    if heading_sd == 0.0:                          # a noiseless heading: a step function
+        return 1.0 if alpha > 0.5 * math.pi else 0.0
+    return _normal_cdf((alpha - 0.5 * math.pi) / heading_sd)

@@ -23,7 +23,22 @@ a trial. Exactly:
   the first-order error of the multiplicative speed and rotation noise of
   :class:`~hippo_probe.world.config.NoiseModel` (independent steps), plus
   :math:`\sigma_0^2`, the per-axis variance of the start prior when the start is
-  unknown (localization; :math:`\hat r_0` is then the start prior's mean).
+  unknown (localization; :math:`\hat r_0` is then the start prior's mean), plus, in the
+  darkness world, the error of the drifting heading frame. To first order each sensed
+  step is off by :math:`\eta_u J D^{obs}_u` (``J`` the quarter turn) with
+  :math:`\mathrm{E}[\eta_u\eta_v] = \sigma_\eta^2\,\delta t\,\min(u, v)`, so the
+  errors of the steps are correlated and add up to a per-axis variance
+
+  .. math:: \sigma_{\eta,t}^2 = \tfrac12\sigma_\eta^2\,\delta t \sum_{k=1}^{t}
+            \big|P_t - P_{k-1}\big|^2,\qquad P_k = \sum_{u \le k} D^{obs}_u,
+
+  (the path still to come after step ``k`` turned by the drift accumulated by then),
+  computed from running sums in O(T). Measured on 400 generalized trials of the darkness
+  world at 200 s, the drift term alone is within 15% of the drift's own error (0.035 vs
+  0.031 m² per axis; the small-angle expansion overstates ``1 - cos``), but the sum of the
+  two terms overstates PI's mean squared error by ~20% (0.096 vs 0.078 m²): the drift's
+  shrinkage of the sensed path correlates with the speed noise's error. A naive
+  reference keeps the independent-sum approximation.
 * **Posterior mean.** Each kernel times the likelihood is Gaussian, so
 
   .. math:: \hat r_t = \frac{\sigma_t^2\,\bar c_t + s^2\,m_t}{\sigma_t^2 + s^2},\qquad
@@ -180,7 +195,8 @@ def naive_bayes(batch, *, start: str | None = None, prior: TargetPrior | None = 
     pi = origin[None] + np.cumsum(disp, axis=0)                      # (T, B, 2)
     noise = config.world.noise
     step_var = 0.5 * (noise.speed_sd ** 2 + noise.rotation_sd ** 2)
-    pi_var = step_var * np.cumsum(np.sum(disp ** 2, axis=-1), axis=0) + start_var[None]
+    pi_var = (step_var * np.cumsum(np.sum(disp ** 2, axis=-1), axis=0) + start_var[None]
+              + drift_variance(disp, noise.heading_drift, batch.dt))
     s2 = prior.kernel_variance
     estimate = np.empty_like(pi)
     n_fallback = 0
@@ -203,6 +219,25 @@ def naive_bayes(batch, *, start: str | None = None, prior: TargetPrior | None = 
         "nb", batch, start=start, prior_trials=prior.n_trials, prior_split=prior.split,
         prior_cell_m=prior.cell, time_window=prior.time_window,
         n_fallback_to_pi=n_fallback))
+
+
+def drift_variance(disp, heading_drift: float, dt: float) -> np.ndarray:
+    r"""Per-axis variance (T, B) of path integration's error from the heading drift
+    (module docstring): :math:`\tfrac12\sigma_\eta^2\delta t\sum_{k \le t}|P_t -
+    P_{k-1}|^2 = \tfrac12\sigma_\eta^2\delta t\,(t|P_t|^2 - 2P_t\cdot Q_t + R_t)` with
+    :math:`Q_t = \sum_{k<t} P_k`, :math:`R_t = \sum_{k<t}|P_k|^2`, :math:`P_0 = 0`.
+
+    ``disp`` (T, B, 2) are the sensed displacements; zeros without drift.
+    """
+    if heading_drift == 0:
+        return np.zeros(disp.shape[:2])
+    track = np.cumsum(disp, axis=0)                                    # P_1 ... P_T
+    before = np.concatenate([np.zeros_like(track[:1]), track[:-1]])     # P_0 ... P_{T-1}
+    q = np.cumsum(before, axis=0)
+    r = np.cumsum(np.sum(before ** 2, axis=-1), axis=0)
+    t = np.arange(1, len(disp) + 1)[:, None]
+    total = t * np.sum(track ** 2, axis=-1) - 2 * np.sum(track * q, axis=-1) + r
+    return 0.5 * heading_drift ** 2 * dt * np.maximum(total, 0.0)
 
 
 def _gauss(centres, mean, var):

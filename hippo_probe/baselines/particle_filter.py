@@ -82,11 +82,12 @@ from ..tasks import TaskConfig
 from ._common import (BaselineResult, provenance, resolve_start, resolve_task,
                       start_prior_samples)
 from .config import STREAM_TAGS, BaselineConfig
-from .contact import ContactModel, Observations, contact_terms, towards_probability, wall_table
+from .contact import ContactModel, Observations, towards, wall_table, wall_terms
 
 
 def particle_filter(batch, n_particles: int | None = None, *, start: str | None = None,
-                    keep=(), threads: int | None = None, config: TaskConfig | None = None,
+                    oriented: bool = True, keep=(), threads: int | None = None,
+                    config: TaskConfig | None = None,
                     baseline: BaselineConfig | None = None) -> BaselineResult:
     """Oracular particle filter: the arena of each trial is known; see the module docstring.
 
@@ -94,25 +95,31 @@ def particle_filter(batch, n_particles: int | None = None, *, start: str | None 
     ----------
     batch : TrialBatch
     n_particles : int, optional
-        Particles per trial (default ``ParticleFilterConfig.n_particles`` = 1,000).
+        Particles per trial (default ``ParticleFilterConfig.n_particles`` = 1,000 with a
+        known start, ``unknown_start_particles`` = 2,000 with an unknown one).
     start : {"known", "unknown"}, optional
         Unknown: particles start uniform in the arena (at least the touch range from its
         walls, as the tasks draw starts). Default: unknown for localization, known
         otherwise.
+    oriented : bool
+        Whether the heading drift is known to start at 0 (the world's trials: the rat is
+        oriented when a trial begins). False starts the drift hypotheses uniform on
+        [-pi, pi): the start heading is unknown.
     keep : sequence of int
-        Steps whose particles and weights to return (``result.particles``).
+        Steps whose particles, weights and drifts to return (``result.particles``).
     threads : int, optional
         Trials run in parallel on this many threads (default: all cores).
     config : TaskConfig, optional
-        The task's configuration if the batch was made with a modified world.
+        Must be the batch's own (``batch.config``, the default) if given.
     baseline : BaselineConfig, optional
 
     Returns
     -------
     BaselineResult
         ``estimate`` (T, B, 2) in the target frame, ``mean`` (T, B, 2) and ``cov``
-        (T, B, 3) of the position in the arena frame; ``attrs`` count resamplings and
-        skipped observations.
+        (T, B, 3) of the position in the arena frame, ``drift_mean`` and ``drift_sd``
+        (T, B) of the heading drift; ``attrs`` count resamplings and skipped
+        observations.
 
     Examples
     --------
@@ -124,27 +131,33 @@ def particle_filter(batch, n_particles: int | None = None, *, start: str | None 
     """
     config = resolve_task(batch, config)
     baseline = baseline or BaselineConfig()
-    n_particles = check_positive("n_particles", n_particles
-                                 or baseline.particle_filter.n_particles, integer=True)
     start = resolve_start(start, config)
+    if n_particles is None:
+        pf = baseline.particle_filter
+        n_particles = pf.unknown_start_particles if start == "unknown" else pf.n_particles
+    n_particles = check_positive("n_particles", n_particles, integer=True)
     tables = wall_table(batch.arena_vertices)[:, None]           # (B, 1, V, 8)
     run = run_filter(batch, tables, np.arange(len(batch)), n_particles, start, config,
-                     baseline, "particle_filter", keep=keep, threads=threads)
+                     baseline, "particle_filter", oriented=oriented, keep=keep,
+                     threads=threads)
     return BaselineResult(
         "pf", run["estimate"], mean=run["mean"], cov=run["cov"],
+        drift_mean=run["drift_mean"], drift_sd=run["drift_sd"],
         particles=run["particles"], particle_weights=run["weights"],
+        particle_drifts=run["drifts"],
         attrs=provenance("pf", batch, n_particles=n_particles, start=start,
-                         **run["diagnostics"]))
+                         oriented=bool(oriented), **run["diagnostics"]))
 
 
 def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseline, stream,
-               *, keep=(), threads=None, class_output=False):
+               *, oriented=True, keep=(), threads=None, class_output=False):
     """Run the particle kernel on every trial of ``batch``.
 
     ``tables`` (n_tables, A, V, 8) holds wall tables of ``A`` arena hypotheses; trial ``b``
     uses ``tables[table_of_trial[b]]`` and its particles start spread evenly over the
-    ``A`` hypotheses (particle ``i`` in arena ``i * A // N``). Returns a dict of
-    time-major outputs.
+    ``A`` hypotheses (particle ``i`` in arena ``i * A // N``). Particles carry a heading
+    drift hypothesis, 0 at the start if ``oriented`` (else uniform on [-pi, pi)),
+    diffusing as the world's drift does. Returns a dict of time-major outputs.
     """
     n_trials, n_steps = len(batch), batch.n_steps
     n_arenas = tables.shape[1]
@@ -158,6 +171,7 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
     pf = baseline.particle_filter
     model = ContactModel.from_config(config.world, baseline.contact)
     noise = config.world.noise
+    drift_step_sd = noise.heading_drift * math.sqrt(batch.dt)
     obs = Observations.from_batch(batch)
     relative = config.target == "start_relative"
     snapshot_of_step = np.full(n_steps, -1, dtype=np.int64)
@@ -166,9 +180,11 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
     estimate = np.empty((n_trials, n_steps, 2))
     mean = np.empty((n_trials, n_steps, 2))
     cov = np.empty((n_trials, n_steps, 3))
+    drift = np.empty((n_trials, n_steps, 2))                     # mean, s.d.
     classes = np.empty((n_trials, n_steps, n_arenas if class_output else 0), np.float32)
     snap_xy = np.empty((n_trials, keep.size, n_particles, 2))
     snap_w = np.empty((n_trials, keep.size, n_particles))
+    snap_eta = np.empty((n_trials, keep.size, n_particles))
     snap_arena = np.empty((n_trials, keep.size, n_particles), np.int64)
     counts = np.zeros((n_trials, 2), np.int64)
     arena = (np.arange(n_particles) * n_arenas // n_particles).astype(np.int64)
@@ -183,14 +199,16 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
         else:
             x0 = start_prior_samples(batch.arena_vertices[b], rng, n_particles, clearance)
         x, y = np.ascontiguousarray(x0[:, 0]), np.ascontiguousarray(x0[:, 1])
+        eta = np.zeros(n_particles) if oriented else rng.uniform(-np.pi, np.pi, n_particles)
         counts[b] = _filter_trial(
-            rng, x, y, x.copy(), y.copy(), arena.copy(), tables[table_of_trial[b]],
+            rng, x, y, x.copy(), y.copy(), eta, arena.copy(), tables[table_of_trial[b]],
             obs.displacement[b], obs.heading[b], obs.turn[b], obs.contact[b], obs.distance[b],
             obs.angle[b], obs.path_length[b], pf.intermediate_checks, noise.speed_sd,
-            noise.rotation_sd, pf.resample_threshold, model.kernel_args(), model.heading_sd,
-            model.touch_range, model.min_clearance, model.outlier_probability,
-            model.outlier_density, floor, relative, class_output, snapshot_of_step,
-            estimate[b], mean[b], cov[b], classes[b], snap_xy[b], snap_w[b], snap_arena[b])
+            noise.rotation_sd, drift_step_sd, pf.resample_threshold, model.kernel_args(),
+            model.heading_sd, model.touch_range, model.min_clearance,
+            model.outlier_probability, model.outlier_density, floor, relative, class_output,
+            snapshot_of_step, estimate[b], mean[b], cov[b], drift[b], classes[b], snap_xy[b],
+            snap_w[b], snap_eta[b], snap_arena[b])
 
     if threads == 1 or n_trials == 1:
         for b in range(n_trials):
@@ -204,9 +222,11 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
 
     return {
         "estimate": time_major(estimate), "mean": time_major(mean), "cov": time_major(cov),
+        "drift_mean": time_major(drift[..., 0]), "drift_sd": time_major(drift[..., 1]),
         "class_probability": time_major(classes) if class_output else None,
         "particles": time_major(snap_xy) if keep.size else None,
         "weights": time_major(snap_w) if keep.size else None,
+        "drifts": time_major(snap_eta) if keep.size else None,
         "arenas": time_major(snap_arena) if keep.size else None,
         "diagnostics": {"mean_resamplings": float(counts[:, 1].mean()),
                         "n_skipped": int(counts[:, 0].sum()),
@@ -258,17 +278,18 @@ def _nearest_walls(walls, x, y, best, nearest, crossings):
 
 
 @numba.njit(cache=True, nogil=True)
-def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact, distance,
-                  angle, path_length, n_checks, speed_sd, rotation_sd, resample_threshold,
-                  contact_args, heading_sd, touch_range, min_clearance, outlier_p,
-                  outlier_density, floor, relative, class_output,
-                  snapshot_of_step, out_estimate, out_mean, out_cov, out_class, snap_xy,
-                  snap_w, snap_arena):
+def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, contact,
+                  distance, angle, path_length, n_checks, speed_sd, rotation_sd,
+                  drift_step_sd, resample_threshold, contact_args, heading_sd, touch_range,
+                  min_clearance, outlier_p, outlier_density, floor, relative, class_output,
+                  snapshot_of_step, out_estimate, out_mean, out_cov, out_drift, out_class,
+                  snap_xy, snap_w, snap_eta, snap_arena):
     """One trial of the particle filter (module docstring, steps 1-4). Particles (``x, y``,
-    their start ``sx, sy`` and arena hypothesis ``arena``, sorted) are updated in place;
-    returns (number of skipped observations, number of resamplings)."""
+    their start ``sx, sy``, heading drift ``eta`` and arena hypothesis ``arena``, sorted)
+    are updated in place; returns (number of skipped observations, number of
+    resamplings)."""
     n = x.size
-    n_arenas, n_walls = walls.shape[0], walls.shape[1]
+    n_arenas = walls.shape[0]
     w = np.full(n, 1.0 / n)
     lik = np.empty(n)
     best = np.empty(n)
@@ -277,40 +298,36 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
     xp, yp = np.empty(n), np.empty(n)
     xm, ym, mid_best, mid_nearest, mid_crossings = (np.empty(n), np.empty(n), np.empty(n),
                                                    np.empty(n), np.empty(n))
-    x2, y2, sx2, sy2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    x2, y2, sx2, sy2, eta2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     arena2 = np.empty(n, dtype=arena.dtype)
     w2 = np.empty(n)
     alloc = np.empty(n_arenas, dtype=np.int64)
-    per_wall = np.empty((n_arenas, n_walls))
-    reach, sd = np.empty((n_arenas, n_walls)), np.empty((n_arenas, n_walls))
     mass = np.empty(n_arenas)
     block = np.zeros(n_arenas + 1, dtype=np.int64)
     n_skipped = 0
     n_resampled = 0
     for t in range(disp.shape[0]):
         touched = contact[t]
-        if touched:
-            contact_terms(walls, heading[t], angle[t], path_length[t], *contact_args,
-                          per_wall, reach, sd)
-        else:
-            towards_probability(walls, heading[t], heading_sd, per_wall)
-        # 1. motion: D = (1 + e_s) R(e_r) D_obs, the first-order inverse of the sensor
+        # 1. motion: the drift diffuses, then D = (1 + e_s) R(e_r - eta) D_obs, the
+        # first-order inverse of the sensor (the displacement was sensed in the frame
+        # turned by the drift)
         dox, doy = disp[t, 0], disp[t, 1]
         for i in range(n):
+            if drift_step_sd > 0.0:
+                eta[i] += drift_step_sd * rng.standard_normal()
             gain = max(1.0 + speed_sd * rng.standard_normal(), 0.0)
-            c, s = _cos_sin(rotation_sd * rng.standard_normal())
+            c, s = _cos_sin(rotation_sd * rng.standard_normal() - eta[i])
             c, s = gain * c, gain * s
             xp[i], yp[i] = x[i], y[i]
             x[i] += c * dox - s * doy
             y[i] += s * dox + c * doy
-        # 2. weights, one arena block at a time (particles are sorted by arena)
+        # 2. weights, one arena block at a time (particles are sorted by arena); each
+        # particle reads the heading-dependent terms with its own heading, sensed - eta
         block[1:] = 0
         for i in range(n):
             block[arena[i] + 1] += 1
         for a in range(n_arenas):
             block[a + 1] += block[a]
-        if touched:
-            lik[:] = 0.0
         for a in range(n_arenas):
             lo, hi = block[a], block[a + 1]
             if lo == hi:
@@ -318,11 +335,9 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
             _nearest_walls(walls[a], x[lo:hi], y[lo:hi], best[lo:hi], nearest[lo:hi],
                            crossings[lo:hi])
             if touched:
-                for k in range(n_walls):
-                    if per_wall[a, k] > 0.0:
-                        _add_contact(walls[a, k], per_wall[a, k], xp[lo:hi], yp[lo:hi],
-                                     x[lo:hi], y[lo:hi], distance[t], reach[a, k], sd[a, k],
-                                     lik[lo:hi])
+                _contact_likelihood(walls[a], heading[t], angle[t], path_length[t],
+                                    contact_args, distance[t], eta[lo:hi], xp[lo:hi],
+                                    yp[lo:hi], x[lo:hi], y[lo:hi], lik[lo:hi])
         for i in range(n):
             d = math.sqrt(best[i])
             if int(crossings[i]) % 2 == 0 or d < min_clearance:
@@ -330,7 +345,8 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
             elif touched:
                 lik[i] = (1.0 - outlier_p) * lik[i] + outlier_p * outlier_density
             elif d < touch_range:
-                lik[i] = 1.0 - per_wall[arena[i], int(nearest[i])]
+                lik[i] = 1.0 - towards(walls[arena[i], int(nearest[i]), 7],
+                                       heading[t] - eta[i], heading_sd)
             else:
                 lik[i] = 1.0
         if not touched:
@@ -338,8 +354,7 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
             # from start to end, headings turning by the sensed change
             for j in range(1, n_checks + 1):
                 f = j / (n_checks + 1.0)
-                towards_probability(walls, heading[t] - (1.0 - f) * turn[t], heading_sd,
-                                    per_wall)
+                back = heading[t] - (1.0 - f) * turn[t]
                 for i in range(n):
                     xm[i] = xp[i] + f * (x[i] - xp[i])
                     ym[i] = yp[i] + f * (y[i] - yp[i])
@@ -350,7 +365,8 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
                                        mid_nearest[lo:hi], mid_crossings[lo:hi])
                 for i in range(n):
                     if mid_best[i] < touch_range * touch_range:
-                        lik[i] *= 1.0 - per_wall[arena[i], int(mid_nearest[i])]
+                        lik[i] *= 1.0 - towards(walls[arena[i], int(mid_nearest[i]), 7],
+                                                back - eta[i], heading_sd)
         total = 0.0
         for i in range(n):
             total += w[i] * lik[i]
@@ -371,22 +387,25 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
                 for i in range(n):
                     x[i], y[i] = xp[i], yp[i]
         # 3. estimates
-        mx = my = tx = ty = sum_w2 = 0.0
+        mx = my = tx = ty = me = sum_w2 = 0.0
         mass[:] = 0.0
         for i in range(n):
             mx += w[i] * x[i]
             my += w[i] * y[i]
+            me += w[i] * eta[i]
             tx += w[i] * (x[i] - sx[i])
             ty += w[i] * (y[i] - sy[i])
             sum_w2 += w[i] * w[i]
             mass[arena[i]] += w[i]
-        cxx = cyy = cxy = 0.0
+        cxx = cyy = cxy = cee = 0.0
         for i in range(n):
-            dx, dy = x[i] - mx, y[i] - my
+            dx, dy, de = x[i] - mx, y[i] - my, eta[i] - me
             cxx += w[i] * dx * dx
             cyy += w[i] * dy * dy
             cxy += w[i] * dx * dy
+            cee += w[i] * de * de
         out_mean[t, 0], out_mean[t, 1] = mx, my
+        out_drift[t, 0], out_drift[t, 1] = me, math.sqrt(cee)
         out_estimate[t, 0], out_estimate[t, 1] = (tx, ty) if relative else (mx, my)
         out_cov[t, 0], out_cov[t, 1], out_cov[t, 2] = cxx, cyy, cxy
         if class_output:
@@ -397,6 +416,7 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
             for i in range(n):
                 snap_xy[k, i, 0], snap_xy[k, i, 1] = x[i], y[i]
                 snap_w[k, i] = w[i]
+                snap_eta[k, i] = eta[i]
                 snap_arena[k, i] = arena[i]
         # 4. resampling, arena by arena (keeps the particles sorted by arena)
         if 1.0 / sum_w2 < resample_threshold * n:
@@ -417,6 +437,7 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
                         j += 1
                         cum += w[j] / mass[a]
                     x2[out], y2[out], sx2[out], sy2[out] = x[j], y[j], sx[j], sy[j]
+                    eta2[out] = eta[j]
                     arena2[out] = a
                     w2[out] = mass[a] / k
                     out += 1
@@ -424,6 +445,7 @@ def _filter_trial(rng, x, y, sx, sy, arena, walls, disp, heading, turn, contact,
             y, y2 = y2, y
             sx, sx2 = sx2, sx
             sy, sy2 = sy2, sy
+            eta, eta2 = eta2, eta
             arena, arena2 = arena2, arena
             w, w2 = w2, w
     return n_skipped, n_resampled
@@ -461,24 +483,35 @@ def _wall_distance(wall, px, py):
 
 
 @numba.njit(cache=True, nogil=True)
-def _add_contact(wall, weight, xs, ys, xe, ye, distance, reach, sd, lik):
-    """``lik[i] += weight * N(d; d_i, sd^2)`` for particles moving from ``(xs, ys)`` to
-    ``(xe, ye)``, ``d_i`` the apex of their V against this wall
-    (:mod:`~hippo_probe.baselines.contact`); particles whose path stays more than
-    ``_BAND`` s.d. beyond the sensed distance are skipped (their term is below 1e-14 of
-    the peak)."""
-    norm = weight / (math.sqrt(2.0 * math.pi) * sd)
-    far = distance + 0.5 * reach + _BAND * sd
+def _contact_likelihood(walls, heading, angle, path_length, contact_args, distance, eta,
+                        xs, ys, xe, ye, lik):
+    """``lik[i] = sum_k p(beta | k, heading - eta_i) N(d; d_ik, sd_ik^2)`` for particles
+    moving from ``(xs, ys)`` to ``(xe, ye)`` in one arena (``walls (V, 8)``), ``d_ik`` the
+    apex of their V against wall ``k`` (:mod:`~hippo_probe.baselines.contact`). Walls
+    beyond the angle cutoff, and walls the path stays more than ``_BAND`` s.d. beyond
+    the sensed distance, are skipped (their terms are below 1e-14 of the peak)."""
+    angle_obs_var, angle_wall_var, distance_var, path_length_error, cutoff = contact_args
     for i in range(xe.size):
-        end = _wall_distance(wall, xe[i], ye[i])
-        if end - 0.5 * reach > far:
-            continue
-        start = _wall_distance(wall, xs[i], ys[i])
-        apex = min(0.5 * (start + end - reach), start, end)
-        z = (distance - apex) / sd
-        if abs(z) < _BAND:
-            lik[i] += norm * math.exp(-0.5 * z * z)
+        total = 0.0
+        h = heading - eta[i]
+        for k in range(walls.shape[0]):
+            weight, reach, sd = wall_terms(walls[k, 7], h, angle, path_length, angle_obs_var,
+                                           angle_wall_var, distance_var, path_length_error,
+                                           cutoff)
+            if weight == 0.0:
+                continue
+            end = _wall_distance(walls[k], xe[i], ye[i])
+            if end - 0.5 * reach > distance + 0.5 * reach + _BAND * sd:
+                continue
+            start = _wall_distance(walls[k], xs[i], ys[i])
+            apex = min(0.5 * (start + end - reach), start, end)
+            z = (distance - apex) / sd
+            if abs(z) < _BAND:
+                total += weight / (_SQRT2PI * sd) * math.exp(-0.5 * z * z)
+        lik[i] = total
 
+
+_SQRT2PI = math.sqrt(2.0 * math.pi)
 
 #: Half-width, in s.d. of the contact distance, of the band where the contact likelihood
 #: is evaluated (exp(-8^2/2) ~ 1e-14).

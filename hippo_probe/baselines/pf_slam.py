@@ -1,6 +1,7 @@
 r"""PF-SLAM for the specialized task: position and arena identity, jointly.
 
-Each particle carries a position and one of the task's fixed arenas as its hypothesis;
+Each particle carries a position, a heading drift (darkness world) and one of the task's
+fixed arenas as its hypothesis;
 the filter is the oracular particle filter of :mod:`~hippo_probe.baselines.particle_filter`
 (same motion model, contact and no-contact likelihoods, resampling) with each particle's
 likelihood computed in its own arena. The posterior probability of arena ``a`` is the
@@ -61,8 +62,9 @@ def pf_slam(batch, n_particles: int | None = None, *, keep=(), threads: int | No
     Returns
     -------
     BaselineResult
-        ``estimate`` (T, B, 2) (arena frame), ``mean``, ``cov`` (T, B, 3) and
-        ``class_probability`` (T, B, n_arenas) float32.
+        ``estimate`` (T, B, 2) (arena frame), ``mean``, ``cov`` (T, B, 3),
+        ``drift_mean``, ``drift_sd`` (T, B) and ``class_probability`` (T, B, n_arenas)
+        float32.
 
     Examples
     --------
@@ -77,15 +79,18 @@ def pf_slam(batch, n_particles: int | None = None, *, keep=(), threads: int | No
     if config.arenas != "fixed" or config.start != "centre":
         raise ValueError(f"`batch` must come from a task with fixed arenas and a known start "
                          f"(specialized); got task {batch.task!r}")
-    n_particles = check_positive("n_particles", n_particles
-                                 or baseline.particle_filter.slam_particles, integer=True)
+    if n_particles is None:
+        n_particles = baseline.particle_filter.slam_particles
+    n_particles = check_positive("n_particles", n_particles, integer=True)
     tables = wall_table(fixed_arenas(config.name, config))[None]      # (1, A, V, 8)
     run = run_filter(batch, tables, np.zeros(len(batch), np.int64), n_particles, "known",
                      config, baseline, "pf_slam", keep=keep, threads=threads,
                      class_output=True)
     return BaselineResult(
         "pfslam", run["estimate"], mean=run["mean"], cov=run["cov"],
+        drift_mean=run["drift_mean"], drift_sd=run["drift_sd"],
         class_probability=run["class_probability"], particles=run["particles"],
-        particle_weights=run["weights"], particle_arenas=run["arenas"],
+        particle_weights=run["weights"], particle_drifts=run["drifts"],
+        particle_arenas=run["arenas"],
         attrs=provenance("pfslam", batch, n_particles=n_particles,
                          n_arenas=int(tables.shape[1]), **run["diagnostics"]))

@@ -26,6 +26,9 @@ variable                   dims                                meaning
 ``estimate_pfslam``        (trial_id, trial_time, space)       PF-SLAM (specialized only)
 ``class_probability_``     (trial_id, trial_time,              PF-SLAM's posterior over
 ``pfslam``                 environment_id)                     arenas, float32
+``heading_drift``          (trial_id, trial_time)              true heading drift (rad)
+``estimate_drift_pf``,     (trial_id, trial_time)              the PF's posterior mean
+``pf_drift_sd``                                                and s.d. of the drift
 ``start_position``         (trial_id, space)                   start, arena frame
 ``trial_environment``      (trial_id)                          arena id of each trial
 =========================  ==================================  =======================
@@ -34,7 +37,7 @@ All estimates are in the **arena frame** (metres), as recordings store them: for
 generalized task the start is added back to the start-relative estimate. Flattening
 ``(trial_id, trial_time)`` in C order gives the samples of a recording that concatenates
 the same trials in the same order along ``time``. Every variable carries ``units`` and
-``long_name``; dataset attrs hold the task, split, seed, ``dt``, particle counts, the
+``long_name``; dataset attrs hold the task, world, split, seed, ``dt``, particle counts, the
 package version and each method's provenance (``attrs_<method>``, a JSON string).
 """
 
@@ -51,7 +54,7 @@ import numpy as np
 from .._validators import check_positive
 from .._version import __version__
 from ..tasks import TaskConfig
-from ._common import resolve_task
+from ._common import resolve_start, resolve_task
 from .config import REPORT_TIMES, BaselineConfig
 from .naive_bayes import naive_bayes, target_prior
 from .particle_filter import particle_filter
@@ -104,8 +107,13 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
     baseline = baseline or BaselineConfig()
     chunk = check_positive("chunk", chunk, integer=True)
     pf_config = baseline.particle_filter
-    n_particles = n_particles or pf_config.n_particles
-    slam_particles = slam_particles or pf_config.slam_particles
+    if n_particles is None:
+        unknown = resolve_start(None, config) == "unknown"
+        n_particles = pf_config.unknown_start_particles if unknown else pf_config.n_particles
+    if slam_particles is None:
+        slam_particles = pf_config.slam_particles
+    n_particles = check_positive("n_particles", n_particles, integer=True)
+    slam_particles = check_positive("slam_particles", slam_particles, integer=True)
     slam = config.classify
     prior = target_prior(batch.task, seed=int(batch.seed), config=config,
                          naive_bayes=baseline.naive_bayes)
@@ -146,6 +154,15 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
         attrs[f"attrs_{name}"] = json.dumps(_merge_attrs(results), default=float)
     data["pf_cov"] = (("trial_id", "trial_time", "cov"), trial_major(parts["pf"], "cov"),
                       {"units": "m^2", "long_name": "particle filter posterior covariance"})
+    time_dims = ("trial_id", "trial_time")
+    data["heading_drift"] = (time_dims, np.swapaxes(batch.heading_drift, 0, 1),
+                             {"units": "rad", "long_name": "true heading drift"})
+    data["estimate_drift_pf"] = (time_dims, trial_major(parts["pf"], "drift_mean"),
+                             {"units": "rad", "long_name": "particle filter heading drift, "
+                                                           "posterior mean"})
+    data["pf_drift_sd"] = (time_dims, trial_major(parts["pf"], "drift_sd"),
+                           {"units": "rad", "long_name": "particle filter heading drift, "
+                                                         "posterior s.d."})
     coords = {
         "trial_id": ("trial_id", np.asarray(batch.trial_index, dtype=np.int64),
                      {"long_name": "trial index within the split"}),
@@ -169,6 +186,7 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
     return xr.Dataset(data, coords=coords, attrs={
         "schema": "hippo_probe.baselines/1", "task": batch.task, "split": batch.split,
         "seed": int(batch.seed), "dt": float(batch.dt), "frame": "arena",
+        "world": config.world.name, "heading_drift": float(config.world.noise.heading_drift),
         "n_particles": int(n_particles), "slam_particles": int(slam_particles) if slam else 0,
         "created_by": f"hippo_probe {__version__}", **attrs})
 
@@ -207,8 +225,9 @@ def error_table(ds, times=REPORT_TIMES) -> str:
     """Plain-text table of the mean errors at ``times`` (s)."""
     errors = localization_errors(ds)
     head = f"{'method':<32}" + "".join(f"{f'{t:g} s':>10}" for t in times)
-    rows = [f"{ds.attrs.get('task', '')}: mean localization error (m) over "
-            f"{ds.sizes['trial_id']} {ds.attrs.get('split', '')} trials", head,
+    rows = [f"{ds.attrs.get('task', '')} ({ds.attrs.get('world', 'compass')} world): mean "
+            f"localization error (m) over {ds.sizes['trial_id']} {ds.attrs.get('split', '')} "
+            f"trials", head,
             "-" * len(head)]
     for name in errors["baseline"].values:
         values = [float(errors.sel(baseline=name).sel(trial_time=t, method="nearest"))
@@ -232,8 +251,8 @@ def plot_errors(ds, ax=None):
     ax.set_xlabel("time since trial start (s)")
     ax.set_ylabel("localization error (m)")
     ax.set_ylim(bottom=0)
-    ax.set_title(f"{ds.attrs.get('task', '')} · {ds.sizes['trial_id']} "
-                 f"{ds.attrs.get('split', '')} trials")
+    ax.set_title(f"{ds.attrs.get('task', '')} · {ds.attrs.get('world', 'compass')} world · "
+                 f"{ds.sizes['trial_id']} {ds.attrs.get('split', '')} trials")
     ax.legend(fontsize=8, frameon=False)
     return fig
 

@@ -7,13 +7,16 @@ def add_commands(sub):
     p = sub.add_parser("record", help="record a network's hidden units on a split "
                                       "(a recording, schema v1, as zarr)")
     p.add_argument("--network", required=True,
-                   help="pretrained name (localization, generalized, specialized, "
-                        "generalized_readout) or a .pt file")
-    p.add_argument("--split", default="test", choices=SPLITS)
+                   help="pretrained name (e.g. generalized, generalized_compass; see "
+                        "hippo_probe.pretrained) or a .pt file")
+    p.add_argument("--split", default="test", choices=SPLITS,
+                   help="split of the trials (default test)")
     p.add_argument("--task", default=None, choices=TASKS,
                    help="task whose trials to run (default: the network's own)")
-    p.add_argument("--trials", type=int, default=1000)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--world", default=None,
+                   help="world of the trials, darkness or compass (default: the network's own)")
+    p.add_argument("--trials", type=int, default=1000, help="number of trials (default 1000)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the split (default 0)")
     p.add_argument("--baselines", default=None, metavar="FILE",
                    help="add the estimates of a `hippo-probe baselines` output file")
     p.add_argument("--out", required=True, help="destination zarr store")
@@ -36,7 +39,7 @@ def _record(a):
 
     net = load_pretrained(a.network)
     task = a.task or net.task
-    batch = make_trials(task, a.trials, a.split, a.seed)
+    batch = make_trials(task, a.trials, a.split, a.seed, world=a.world or net.world)
     baselines = None
     if a.baselines:
         from ..baselines.results import open_baselines

@@ -20,6 +20,7 @@ BASELINE_VARIABLES = {
     "estimate_nb": ("time", "space"), "estimate_pf": ("time", "space"),
     "estimate_pfslam": ("time", "space"), "pf_cov": ("time", "cov"),
     "class_probability_pfslam": ("time", "environment_id"),
+    "estimate_drift_pf": ("time",), "pf_drift_sd": ("time",),
 }
 
 
@@ -31,6 +32,13 @@ def baselines_from_dataset(ds, batch) -> dict:
     if missing:
         raise ValueError(f"`baselines` file lacks trials {missing[:5]} of the batch "
                          f"(it has {ds.sizes['trial_id']} trials)")
+    # positions are the same in both worlds (only the heading is sensed differently), so
+    # the world must be checked by name; files from before the darkness world are compass
+    world = ds.attrs.get("world", "compass")
+    if world != batch.world.name:
+        raise ValueError(f"`baselines` file was made in the {world!r} world; the batch is "
+                         f"of the {batch.world.name!r} world: rerun `hippo-probe baselines "
+                         f"--world {batch.world.name}`")
     ds = ds.sel(trial_id=batch.trial_index)
     position = np.moveaxis(ds["position"].values, 0, 1)
     if position.shape != batch.position.shape or not np.allclose(position, batch.position,
@@ -74,8 +82,7 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
     session_id, checkpoint : str, optional
         Dataset attrs (defaults: ``"<task>-<split>-seed<seed>"`` and the network's file).
     config : TaskConfig, optional
-        The configuration the batch was made with, if not its task's default (e.g.
-        ``task_config("generalized", arenas="fixed", n_arenas=2)``).
+        Must be the batch's own configuration (``batch.config``, the default) if given.
 
     Returns
     -------
@@ -97,7 +104,7 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
     """
     h, xy, prob = run_network(network, batch, chunk)
     T, B, H = h.shape
-    task = config or task_config(batch.task)
+    task = batch.checked_config(config)
     net_task = getattr(network, "task", None) or batch.task
     # the readout speaks in the frame of the task the network was trained on
     if task_config(net_task).target == "start_relative":
@@ -110,8 +117,10 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
         start_position=batch.start, task=batch.task, split=batch.split,
         seed=int(batch.seed), network_task=str(net_task),
         checkpoint=str(checkpoint or net_file or net_task),
-        session_id=session_id or f"{batch.task}-{batch.split}-seed{batch.seed}",
-        subject=f"navigator-{net_task}", species="artificial (peephole LSTM)")
+        session_id=session_id or f"{batch.task}-{task.world.name}-{batch.split}-seed{batch.seed}",
+        subject=f"navigator-{net_task}", species="artificial (peephole LSTM)",
+        world=task.world.name, heading_drift_rad_per_sqrt_s=float(task.world.noise.heading_drift),
+        network_world=str((getattr(network, "info", None) or {}).get("world", "unknown")))
 
     # environment table: the classifier's classes (all arenas of its task), else every
     # arena of the batch's task (fixed arenas) or of its trials (novel arenas)
@@ -139,6 +148,7 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
         "activity": (("time", "unit"), stack_trials(h).astype(np.float32)),
         "position": (("time", "space"), stack_trials(batch.position)),
         "head_direction": ("time", stack_trials(batch.head_direction)),
+        "heading_drift": ("time", stack_trials(batch.heading_drift)),
         "contact": ("time", stack_trials(batch.contact)),
         "speed": ("time", stack_trials(step / batch.dt)),
         "estimate": (("time", "space"), stack_trials(estimate)),

@@ -1,9 +1,14 @@
 """Shipped pretrained networks and ``load_pretrained``.
 
-Files here: ``<name>.pt`` (parameters, architecture, task, test metrics) and
+Files here: ``<name>.pt`` (parameters, architecture, task, world, test metrics) and
 ``<name>.log.json`` (the full training log: curves, config, seeds, versions, wall time,
-command line). Names: ``localization``, ``generalized``, ``specialized`` and
-``generalized_readout`` (the generalized network with a retrained arena readout).
+command line). Names: the darkness world's networks (the study's world) under the task's
+name, ``localization``, ``generalized``, ``specialized`` and ``generalized_readout`` (the
+generalized network with a retrained arena readout); the compass world's as
+``localization_compass``, ``generalized_compass``, ``specialized_compass`` and
+``generalized_compass_readout``, kept for the ablation (what the compass takes away).
+A network knows its world (``net.world``): record it, evaluate it and compare it with
+baselines on trials of that world.
 """
 
 from __future__ import annotations
@@ -11,7 +16,13 @@ from __future__ import annotations
 from pathlib import Path
 
 HERE = Path(__file__).parent
-NAMES = ("localization", "generalized", "specialized", "generalized_readout")
+NAMES = ("localization", "generalized", "specialized", "generalized_readout",
+         "localization_compass", "generalized_compass", "specialized_compass",
+         "generalized_compass_readout")
+
+#: The world of a checkpoint that does not name one: every such file was made before the
+#: darkness world existed.
+LEGACY_WORLD = "compass"
 
 
 def available() -> list:
@@ -22,8 +33,12 @@ def available() -> list:
 def resolve_network_file(name_or_path) -> Path:
     """A shipped network's file by name, or a path to a network/checkpoint file."""
     candidate = HERE / f"{name_or_path}.pt"
-    if str(name_or_path) in NAMES and candidate.exists():
-        return candidate        # a shipped name wins over a same-named local folder
+    if str(name_or_path) in NAMES:
+        if candidate.exists():
+            return candidate    # a shipped name wins over a same-named local folder
+        if not Path(name_or_path).exists():
+            raise ValueError(f"the network {name_or_path!r} is not shipped in this version "
+                             f"(its training has not finished); shipped: {available()}")
     path = Path(name_or_path)
     if path.is_dir() and (path / "network.pt").exists():
         return path / "network.pt"      # a training run's directory
@@ -38,6 +53,9 @@ def resolve_network_file(name_or_path) -> Path:
 def load_pretrained(name: str):
     """Load a shipped network (or a network/checkpoint file) as a Navigator in eval mode.
 
+    The network runs float32 whatever precision trained it (``net.info["config"]`` says
+    which), so its outputs, and gradients taken through it, are the same everywhere.
+
     Examples
     --------
     >>> import hippo_probe as hp
@@ -45,6 +63,8 @@ def load_pretrained(name: str):
     >>> net.task                                            # doctest: +SKIP
     'generalized'
     """
+    import dataclasses
+
     from ..model.config import ModelConfig
     from ..model.navigator import Navigator
     from ..training.checkpoint import load
@@ -54,10 +74,12 @@ def load_pretrained(name: str):
     config = obj["model_config"]
     if isinstance(config, dict):
         config = ModelConfig(**{**config, "input_scale": tuple(config["input_scale"])})
-    net = Navigator(config)
+    net = Navigator(dataclasses.replace(config, precision="fp32"))
     net.load_state_dict(obj.get("best_model") or obj["model"])
     net.task = obj.get("task")
+    net.world = obj.get("world") or LEGACY_WORLD
     net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test",
                                         "steps_done", "finished", "base_network")}
+    net.info["world"] = net.world
     net.info["file"] = str(path)
     return net.eval()

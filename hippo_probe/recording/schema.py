@@ -104,6 +104,11 @@ VARIABLES: dict[str, VariableSpec] = {
     "head_direction": VariableSpec(("time",), "rad", "head direction"),
     "speed": VariableSpec(("time",), "m/s", "speed"),
     "contact": VariableSpec(("time",), "1", "boundary contact", kind="b"),
+    "heading_drift": VariableSpec(("time",), "rad",
+                                  "heading drift (sensed minus true head direction)"),
+    "estimate_drift_pf": VariableSpec(("time",), "rad",
+                                      "particle filter heading drift estimate"),
+    "pf_drift_sd": VariableSpec(("time",), "rad", "particle filter heading drift s.d."),
     # estimates (network and baselines), arena frame
     "estimate": VariableSpec(("time", "space"), "m", "network position estimate"),
     "estimate_pi": VariableSpec(("time", "space"), "m", "path integration estimate"),

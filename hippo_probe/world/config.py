@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .._validators import check_number, check_positive
+from .._validators import check_number, check_option, check_positive
 
 
 @dataclass(frozen=True)
@@ -148,34 +148,70 @@ class SensorConfig:
 
 @dataclass(frozen=True)
 class NoiseModel:
-    """Noise on every sensed quantity, per network step (independent across steps).
+    r"""Noise on every sensed quantity, per network step.
 
     The structure follows Cheung, Ball, Milford, Wyeth & Wiles (2012), "Maintaining a
     cognitive map in darkness: the need to fuse boundary knowledge with path integration",
     PLoS Comput Biol 8:e1002651: self-motion is corrupted by multiplicative speed noise
-    and by heading (direction) noise, so PI error grows without bound (as a random walk,
-    ~ sqrt(t)) and only boundary contacts can correct it; boundary contacts themselves are
-    sensed with small errors in distance and angle.
+    and by heading (direction) noise, so path-integration (PI) error grows without bound
+    and only boundary contacts can correct it; boundary contacts themselves are sensed
+    with small errors in distance and angle. In darkness the rat's sense of head
+    direction itself drifts, as a Wiener process (their model of head-direction cells
+    without vision); that drift is :attr:`heading_drift`.
 
-    Generative model, for the true displacement ``D`` over a network step (a 2-vector in
-    the allocentric frame) and heading ``theta``::
+    Generative model, for the true displacement ``D`` over network step ``t`` (a 2-vector
+    in the allocentric frame), true heading ``theta_t`` and heading drift ``eta_t``::
 
-        D_obs     = (1 + e_s) * Rot(e_r) @ D,         e_s ~ N(0, speed_sd^2),
-                                                      e_r ~ N(0, rotation_sd^2)
-        hd_obs    = theta + e_h,                      e_h ~ N(0, head_direction_sd^2)
-        dhd_obs   = wrap(theta_t - theta_{t-1}) + e_dh, e_dh ~ N(0, turn_sd^2)
-        d_obs     = d + e_d,                          e_d ~ N(0, contact_distance_sd^2)
-        beta_obs  = beta + e_b,                       e_b ~ N(0, contact_angle_sd^2)
+        eta_t     = eta_{t-1} + heading_drift * sqrt(dt) * z_t,   eta_0 = 0
+        D_obs     = (1 + e_s) * Rot(eta_t + e_r) @ D,   e_s ~ N(0, speed_sd^2),
+                                                        e_r ~ N(0, rotation_sd^2)
+        hd_obs    = theta_t + eta_t + e_h,              e_h ~ N(0, head_direction_sd^2)
+        dhd_obs   = wrap(theta_t - theta_{t-1}) + (eta_t - eta_{t-1}) + e_dh,
+                                                        e_dh ~ N(0, turn_sd^2)
+        d_obs     = d + e_d,                            e_d ~ N(0, contact_distance_sd^2)
+        beta_obs  = beta + e_b,                         e_b ~ N(0, contact_angle_sd^2)
+
+    (``dt`` the network step, ``z_t`` standard normal; every other noise independent
+    across steps.) ``eta`` starts at 0 because the rat is oriented when a trial begins.
+    The displacement is the rat's own estimate, expressed in its drifting heading frame
+    (what its path integrator computes from idiothetic speed and angular velocity); its
+    heading sense carries the same drift, and so does the sensed turn (the drift *is*
+    the accumulated error of the angular velocity). A contact reports distance ``d`` and
+    angle ``beta`` from the touched wall's inward normal to the body axis: touch is
+    egocentric and does not drift, so which wall was touched is only as certain as the
+    heading is. With ``heading_drift = 0`` the model is the compass world's: heading with
+    independent errors and displacements in the allocentric frame.
 
     Magnitudes: with a mean displacement of 0.06 m per 0.4 s step, the per-step position
-    error is about ``0.06 * sqrt(speed_sd^2 + rotation_sd^2)``; summed over 500
-    independent steps the expected PI error after 200 s is of order
-    ``0.06 * 0.25 * sqrt(500) ~ 0.3 m``, i.e. about the radius of the 0.33 m arenas (the
-    regime where boundaries matter, as Cheung et al. argue for rats in darkness; the
-    measured value is printed by ``hippo-probe world-stats``). Head direction is given
-    with independent 0.1 rad errors and no drift (the study provides the allocentric
-    frame). Contact distance (0-5 cm) is sensed to 5 mm and its angle to 0.2 rad (11 deg):
-    precise, but ambiguous because any wall could have been touched.
+    error of the speed and rotation noise is about ``0.06 * sqrt(speed_sd^2 +
+    rotation_sd^2)``; summed over 500 independent steps, ``0.06 * 0.25 * sqrt(500) ~ 0.3
+    m`` after 200 s, about the radius of the 0.33 m arenas. Head direction has
+    independent 0.1 rad errors on top of any drift. Contact distance (0-5 cm) is sensed
+    to 5 mm and its angle to 0.2 rad (11 deg): precise, but ambiguous because any wall
+    could have been touched. ``hippo-probe world-stats`` prints the measured values.
+
+    Attributes
+    ----------
+    speed_sd, rotation_sd : float
+        0.18 each: relative speed error and rotation (rad) of each sensed displacement.
+    head_direction_sd : float
+        0.1 rad of independent error on the sensed heading.
+    turn_sd : float
+        0.05 rad of independent error on the sensed turn.
+    contact_distance_sd, contact_angle_sd : float
+        0.005 m and 0.2 rad.
+    heading_drift : float
+        S.d. of the heading drift's Wiener increments, rad/sqrt(s): after ``t`` seconds
+        ``eta ~ N(0, heading_drift^2 t)``. 0 in the compass world. The darkness world's
+        0.05 rad/sqrt(s) is calibrated to Cheung et al. (2012), who compare their drift
+        model with head-direction cells recorded without vision drifting 5.1-26.6 deg/min
+        (19 cells): the absolute drift over a 1-minute window is half-normal with s.d.
+        ``0.05 * sqrt(60)`` = 0.39 rad, so its median is ``0.674 * 0.39`` rad = 14.9
+        deg/min, the middle of that range. One drift s.d. serves every trial, so the rates
+        spread wider than the 19 cells' (whose own drift rates differ): 18% of 1-minute
+        windows drift less than 5.1 and 23% more than 26.6 deg/min (half-normal CDF;
+        ``hippo-probe world-stats`` prints the simulated distribution). With it, path
+        integration alone loses the place within 2-3 minutes, their point.
     """
 
     speed_sd: float = 0.18
@@ -184,35 +220,93 @@ class NoiseModel:
     turn_sd: float = 0.05
     contact_distance_sd: float = 0.005
     contact_angle_sd: float = 0.2
+    heading_drift: float = 0.0
 
     def __post_init__(self):
         for name in ("speed_sd", "rotation_sd", "head_direction_sd", "turn_sd",
-                     "contact_distance_sd", "contact_angle_sd"):
+                     "contact_distance_sd", "contact_angle_sd", "heading_drift"):
             check_number(name, getattr(self, name), low=0, low_inclusive=True)
 
     @classmethod
     def noiseless(cls) -> "NoiseModel":
-        """A model with every noise set to zero (for tests of exact path integration)."""
-        return cls(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        """A model with every noise, drift included, set to zero (for tests of exact path
+        integration)."""
+        return cls(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+#: Heading drift of the darkness world (rad/sqrt(s)); see :attr:`NoiseModel.heading_drift`.
+DARKNESS_HEADING_DRIFT = 0.05
+
+#: The named worlds: ``"darkness"`` (the study's, the default) and ``"compass"`` (the first
+#: world of this project, kept for the ablation).
+WORLDS = ("darkness", "compass")
 
 
 @dataclass(frozen=True)
 class WorldConfig:
-    """Everything that defines the world of one task."""
+    """Everything that defines the world of one task.
+
+    The two named worlds share arenas, motion and sensors and differ only in how heading
+    is sensed (:attr:`NoiseModel.heading_drift`): build them with :func:`world_config`.
+    ``WorldConfig()`` is the darkness world with the default (1 m) arena.
+
+    Attributes
+    ----------
+    name : {"darkness", "compass"}
+        The world this configuration belongs to (recorded in trial caches, recordings and
+        checkpoints). A compass world has no drift; a darkness world may have its drift
+        switched off (``heading_drift=0``) for ablations and tests.
+    """
 
     arena: ArenaConfig = field(default_factory=ArenaConfig)
     motion: MotionConfig = field(default_factory=MotionConfig)
     sensors: SensorConfig = field(default_factory=SensorConfig)
-    noise: NoiseModel = field(default_factory=NoiseModel)
+    noise: NoiseModel = field(
+        default_factory=lambda: NoiseModel(heading_drift=DARKNESS_HEADING_DRIFT))
+    name: str = "darkness"
+
+    def __post_init__(self):
+        check_option("name", self.name, WORLDS)
+        if self.name == "compass" and self.noise.heading_drift != 0:
+            raise ValueError(f"the compass world has no heading drift: `heading_drift` must "
+                             f"be 0 for name='compass'; got {self.noise.heading_drift}")
+
+
+def world_config(world="darkness", *, arena: ArenaConfig | None = None) -> WorldConfig:
+    """The named world (``"darkness"`` or ``"compass"``), or ``world`` itself if it is a
+    :class:`WorldConfig` already.
+
+    Parameters
+    ----------
+    world : {"darkness", "compass"} or WorldConfig
+    arena : ArenaConfig, optional
+        The arenas of a named world (default ``ArenaConfig()``); ignored for a given
+        :class:`WorldConfig`, which is used exactly as it is.
+
+    Examples
+    --------
+    >>> world_config("compass").noise.heading_drift
+    0.0
+    >>> world_config("darkness").noise.heading_drift
+    0.05
+    """
+    if isinstance(world, WorldConfig):
+        return world
+    if not isinstance(world, str):
+        raise TypeError(f"`world` must be one of {WORLDS} or a WorldConfig; got {world!r}")
+    check_option("world", world, WORLDS)
+    drift = DARKNESS_HEADING_DRIFT if world == "darkness" else 0.0
+    return WorldConfig(arena=arena or ArenaConfig(), noise=NoiseModel(heading_drift=drift),
+                       name=world)
 
 
 # Network input features, in column order of ``TrialBatch.inputs``.
 FEATURES = (
-    "dx",            # noisy displacement over the step, allocentric x (m)
-    "dy",            # noisy displacement over the step, allocentric y (m)
-    "cos_hd",        # cos of noisy head direction at the end of the step
-    "sin_hd",        # sin of noisy head direction
-    "dhd",           # noisy change of head direction over the step (rad)
+    "dx",            # noisy displacement over the step, in the sensed heading frame, x (m)
+    "dy",            # noisy displacement over the step, in the sensed heading frame, y (m)
+    "cos_hd",        # cos of sensed (noisy, drifting) head direction at the end of the step
+    "sin_hd",        # sin of sensed head direction
+    "dhd",           # sensed change of head direction over the step (rad)
     "contact",       # 1 if the step had a boundary contact, else 0
     "contact_distance",  # noisy distance to the touched wall at contact (m), else 0
     "cos_beta",      # cos of noisy angle from the wall's inward normal to the heading

@@ -27,7 +27,13 @@ def test_one_cell_prior_is_the_gaussian_product():
     pi = path_integration(batch).estimate
     noise = (NoiseModel().speed_sd ** 2 + NoiseModel().rotation_sd ** 2) / 2
     disp = batch.inputs[..., :2].astype(float)
-    v = noise * np.cumsum(np.sum(disp ** 2, axis=-1), axis=0)[..., None]   # PI variance
+    # PI variance: the steps' own errors plus the drifting frame's, by brute force
+    track = np.cumsum(disp, axis=0)
+    before = np.concatenate([np.zeros_like(track[:1]), track[:-1]])
+    remaining = np.array([np.sum((track[t][None] - before[:t + 1]) ** 2, axis=(0, 2))
+                          for t in range(batch.n_steps)])              # (T, B)
+    drift = 0.5 * batch.world.noise.heading_drift ** 2 * batch.dt * remaining
+    v = (noise * np.cumsum(np.sum(disp ** 2, axis=-1), axis=0) + drift)[..., None]
     s2 = prior.kernel_variance
     expected = (v * where + s2 * pi) / (v + s2)       # N(pi, v) times N(where, s2)
     assert np.allclose(res.estimate, expected, atol=1e-9)

@@ -1,12 +1,15 @@
-"""The oracular particle filter: bounded, calibrated, ambiguous only where the world is."""
+"""The oracular particle filter: bounded, calibrated, ambiguous only where the world is,
+in both worlds."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 from scipy import stats
 
 from hippo_probe.baselines import particle_filter, path_integration
-from hippo_probe.tasks import make_trials
-from hippo_probe.world import random_arena
+from hippo_probe.tasks import TASKS, make_trials, task_config
+from hippo_probe.world import WORLDS, NoiseModel, random_arena, regular_polygon
 
 
 def mahalanobis_rank(res, truth):
@@ -43,34 +46,124 @@ def test_error_stays_bounded_while_pi_drifts():
     assert pf.max() < 0.1                                   # within 10 cm all along
 
 
-@pytest.mark.parametrize("task", ["generalized", "localization"])
-def test_calibrated(task):
+def drift_rank(res, truth):
+    """Posterior mass of the drift hypotheses below the true drift: uniform if
+    calibrated."""
+    return np.sum(res.particle_weights * (res.particle_drifts < truth[..., None]),
+                  axis=-1).ravel()
+
+
+@pytest.mark.parametrize("world", WORLDS)
+@pytest.mark.parametrize("task", TASKS)
+def test_calibrated(task, world):
+    """The rank of the truth among the particles is uniform: position in both worlds,
+    and the heading drift in the darkness world (default particle counts)."""
     # snapshots 20 s apart so that successive ranks of a trial are nearly independent
     keep = np.arange(25, 500, 50)
-    batch = make_trials(task, 60, "validation", 0)
-    res = particle_filter(batch, 400, keep=keep)
+    batch = make_trials(task, 60, "validation", 0, world=world)
+    res = particle_filter(batch, keep=keep)
     truth = batch.position[keep]
     rng = np.random.default_rng(0)
-    for ranks in (mahalanobis_rank(res, truth), projection_rank(res, truth, rng)):
-        assert stats.kstest(ranks, "uniform").pvalue > 0.01
+    ranks = [mahalanobis_rank(res, truth), projection_rank(res, truth, rng)]
+    if world == "darkness":
+        ranks.append(drift_rank(res, batch.heading_drift[keep]))
+    else:
+        assert (res.particle_drifts == 0).all() and (res.drift_sd == 0).all()
+    for rank in ranks:
+        assert stats.kstest(rank, "uniform").pvalue > 0.01
         # and the 90% highest-rank region holds the truth 90% of the time
-        assert abs(np.mean(ranks < 0.9) - 0.9) < 0.05
+        assert abs(np.mean(rank < 0.9) - 0.9) < 0.05
+
+
+def test_darkness_filter_tracks_the_drift():
+    batch = make_trials("generalized", 20, "test", 0)
+    res = particle_filter(batch)
+    late = slice(400, None)
+    error = np.abs(res.drift_mean - batch.heading_drift)[late]
+    assert np.median(error) < 0.5 * np.median(np.abs(batch.heading_drift[late]))
+    # the reported s.d. is the size of the error (calibrated within sampling error)
+    assert 0.7 < np.sqrt(np.mean(error ** 2) / np.mean(res.drift_sd[late] ** 2)) < 1.3
+
+
+def test_without_drift_the_darkness_filter_is_the_compass_filter():
+    """The darkness world with its drift switched off makes the compass world's trials,
+    and the filter built for it (drift hypotheses that never move) gives the compass
+    filter's results."""
+    config = task_config("generalized")
+    quiet = replace(config, world=replace(config.world,
+                                          noise=replace(config.world.noise, heading_drift=0)))
+    still = make_trials("generalized", 5, "test", 0, config=quiet)
+    compass = make_trials("generalized", 5, "test", 0, world="compass")
+    assert np.array_equal(still.inputs, compass.inputs) and still.world.name == "darkness"
+    a, b = particle_filter(still, 300), particle_filter(compass, 300)
+    np.testing.assert_allclose(a.estimate, b.estimate, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.cov, b.cov, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("world", WORLDS)
+def test_a_batch_of_another_world_gets_a_filter_of_that_world(world):
+    """A noiseless world: the filter built from the batch's own world has no motion noise
+    and follows the path to millimetres; one built from the default world would spread
+    its particles by centimetres."""
+    exact = task_config("generalized", world=replace(
+        task_config("generalized", world).world, noise=NoiseModel.noiseless()))
+    batch = make_trials("generalized", 4, "test", 0, config=exact)
+    res = particle_filter(batch, 100)
+    assert res.error(batch).max() < 2e-3
+    assert np.sqrt(res.cov[..., :2].sum(axis=-1)).max() < 1e-6
+    default = make_trials("generalized", 4, "test", 0, world=world)
+    assert particle_filter(default, 100).error(default).mean() > 0.01
+
+
+def test_unknown_heading_in_a_regular_polygon_cannot_tell_its_copies_apart(make_trials_in):
+    """Darkness world, start and start heading unknown (drift hypotheses uniform): a
+    regular polygon looks the same after any rotation by a multiple of 2 pi / V, so the
+    exact posterior puts equal mass on the V rotated copies of the truth. A finite
+    particle filter lets that mass wander among the copies (resampling noise; most
+    trials end mostly on one copy), but which copy is chance: the truth's copy gets
+    about 1 / V of the mass on average, while an oriented rat picks it."""
+    n_vertices, n_steps = 5, 100                                          # 40 s
+    arena = regular_polygon(n_vertices, 0.4).vertices
+    batch = make_trials_in(arena, 12, seed=2, n_steps=n_steps)
+    last = n_steps - 1
+    truth = batch.position[last]
+    turns = 2 * np.pi * np.arange(n_vertices) / n_vertices
+    c, s = np.cos(turns)[:, None], np.sin(turns)[:, None]
+    copies = np.stack([c * truth[None, :, 0] - s * truth[None, :, 1],
+                       s * truth[None, :, 0] + c * truth[None, :, 1]], axis=-1)  # (V, B, 2)
+
+    def mass_on_copies(res):
+        p, w = res.particles[0], res.particle_weights[0]                 # (B, N, 2), (B, N)
+        distance = np.linalg.norm(p[None] - copies[:, :, None], axis=-1)   # (V, B, N)
+        near = distance.min(axis=0) < 0.1
+        nearest = np.argmin(distance, axis=0)
+        mass = np.stack([np.sum(w * near * (nearest == k), axis=-1)
+                         for k in range(n_vertices)])                    # (V, B)
+        return mass
+
+    lost = mass_on_copies(particle_filter(batch, 2000, start="unknown", oriented=False,
+                                          keep=[last]))
+    assert np.median(lost.sum(axis=0)) > 0.7         # the posterior sits on the copies ...
+    assert lost[0].mean() < 0.45                     # ... but not on the truth's (1/V = 0.2)
+    assert np.mean(np.argmax(lost, axis=0) == 0) < 0.6
+    oriented = mass_on_copies(particle_filter(batch, 2000, start="unknown", keep=[last]))
+    assert np.median(oriented[0]) > 0.7
 
 
 def test_ambiguous_where_the_world_is(make_trials_in):
-    """With the allocentric frame given, only a translation leaves every input unchanged:
-    in a long corridor the posterior stays spread along its axis (until an end is
-    touched) while contacts pin the cross-axis position; a compact asymmetric arena
-    localizes."""
+    """Compass world: with the allocentric frame given, only a translation leaves every
+    input unchanged: in a long corridor the posterior stays spread along its axis (until
+    an end is touched) while contacts pin the cross-axis position; a compact asymmetric
+    arena localizes."""
     corridor = np.array([[-5.0, -0.15], [5.0, -0.15], [5.0, 0.15], [-5.0, 0.15]])
-    batch = make_trials_in(corridor, 8, seed=1, n_steps=75)             # 30 s
+    batch = make_trials_in(corridor, 8, seed=1, n_steps=75, world="compass")  # 30 s
     res = particle_filter(batch, 500, start="unknown")
     sd_along, sd_across = np.sqrt(res.cov[-1, :, 0]), np.sqrt(res.cov[-1, :, 1])
     assert np.median(sd_along) > 1.0
     assert np.median(sd_across) < 0.03
 
     arena = random_arena(np.random.default_rng(3), 10, 0.6).vertices
-    batch = make_trials_in(arena, 8, seed=1, n_steps=75)
+    batch = make_trials_in(arena, 8, seed=1, n_steps=75, world="compass")
     res = particle_filter(batch, 500, start="unknown")
     sd = np.sqrt(res.cov[-1, :, 0] + res.cov[-1, :, 1])
     assert np.median(sd) < 0.1
@@ -109,5 +202,14 @@ def test_bad_input_is_named():
     with pytest.raises(ValueError, match="`keep` must hold steps"):
         particle_filter(batch, 10, keep=[500])
     with pytest.raises(ValueError, match="`config` is for task"):
-        from hippo_probe.tasks import task_config
         particle_filter(batch, 10, config=task_config("localization"))
+    with pytest.raises(ValueError, match="`n_particles` must be > 0; got 0"):
+        particle_filter(batch, 0)
+
+
+def test_a_filter_configuration_that_disagrees_with_the_batch_is_refused():
+    batch = make_trials("generalized", 1, "test", 0)               # darkness
+    with pytest.raises(ValueError, match="world 'compass'.*the batch's world 'darkness'"):
+        particle_filter(batch, 10, config=task_config("generalized", "compass"))
+    # the batch's own configuration is accepted
+    particle_filter(batch, 10, config=batch.config)

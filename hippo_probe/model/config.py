@@ -4,7 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .._validators import check_option
 from ..world.config import FEATURES, WorldConfig
+
+#: Matmul precisions of the LSTM's training path (see :class:`PeepholeLSTM`).
+PRECISIONS = ("fp32", "bf16")
 
 
 @dataclass(frozen=True)
@@ -23,12 +27,21 @@ class ModelConfig:
         :func:`input_scale_for`.
     forget_bias : float
         Initial forget-gate bias (1.0, Jozefowicz et al. 2015).
+    precision : str
+        Matmul precision of the LSTM's training path, "fp32" or "bf16" (bf16 matmuls on
+        the CPU's AMX units, state and gradient accumulation in float32). Forward passes
+        without autograd (evaluation, ``record``) always run float32, so a network loaded
+        from a file behaves the same whichever precision trained it.
     """
 
     hidden_size: int = 256
     n_classes: int = 0
     input_scale: tuple = (1.0,) * len(FEATURES)
     forget_bias: float = 1.0
+    precision: str = "fp32"
+
+    def __post_init__(self):
+        check_option("precision", self.precision, PRECISIONS)
 
     @property
     def input_size(self) -> int:

@@ -18,6 +18,10 @@ steps is one matmul); the backward pass precomputes every elementwise derivative
 for all steps at once, so its sequential loop is five kernels per step; the weight
 gradients are then one large matmul each. See ``benchmarks/bench_lstm.py``.
 
+A second Function, the bf16 path (``PeepholeLSTM(precision="bf16")``), runs the same math
+with its matmuls in bfloat16 on the CPU's AMX units and the rest in float32, for training;
+see :class:`_PeepholeLSTMBF16Function`.
+
 References
 ----------
 Graves, A. (2013). Generating sequences with recurrent neural networks. arXiv:1308.0850.
@@ -30,9 +34,13 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 import torch
 from torch import nn
 from torch.autograd.function import once_differentiable
+
+from .._validators import check_option
+from .config import PRECISIONS
 
 
 @numba.njit(fastmath=True, cache=True)
@@ -159,6 +167,292 @@ class _PeepholeLSTMFunction(torch.autograd.Function):
         return d_x, dh0, dc, d_w_x, d_w_h4.view(4 * H, H), d_bias, d_w_peep
 
 
+# --- bf16 path -------------------------------------------------------------------------
+#
+# Matmuls run in bfloat16 on the CPU's AMX units; everything else stays float32. torch's
+# CPU matmuls cannot write a float32 result from bf16 operands, so each product comes back
+# rounded to bf16 (after float32 accumulation inside oneDNN) and is widened before it
+# touches the state. The elementwise work of a step is ONE fused numba kernel (forward) and
+# ONE (backward) instead of ~12 and ~5 torch kernels: with the matmuls on AMX, those
+# kernels' launches and memory passes were most of a step. bf16 values cross into numba as
+# int16 bit patterns (numba has no bfloat16): widening is a 16-bit shift, narrowing rounds
+# to nearest even, as torch's own cast does.
+
+#: Coefficients of the [13/6] rational approximation of tanh on [-7.9988, 7.9988] used by
+#: Eigen (``generic_fast_tanh_float``): max abs error 3.4e-7 against float64 tanh, relative
+#: error < 3e-7 near 0 -- a thousand times below a bf16 rounding. numba has no vectorised
+#: exp/tanh (no SVML here): libm's scalar tanh was ~40x slower than this polynomial.
+#: float32 constants throughout: a float64 literal would make numba compute the whole
+#: expression in float64, at half the vector width.
+_TANH_CLAMP = np.float32(7.99881172180175781)
+_TANH_P = tuple(np.float32(c) for c in (
+    4.89352455891786e-03, 6.37261928875436e-04, 1.48572235717979e-05,
+    5.12229709037114e-08, -8.60467152213735e-11, 2.00018790482477e-13,
+    -2.76076847742355e-16))
+_TANH_Q = tuple(np.float32(c) for c in (
+    4.89352518554385e-03, 2.26843463243900e-03, 1.18534705686654e-04,
+    1.19825839466702e-06))
+_HALF, _ONE = np.float32(0.5), np.float32(1.0)
+
+
+@numba.njit(fastmath=True, cache=True, inline="always", error_model="numpy")
+def _tanh(x):
+    x = min(max(x, -_TANH_CLAMP), _TANH_CLAMP)
+    x2 = x * x
+    p = x2 * _TANH_P[6] + _TANH_P[5]
+    p = x2 * p + _TANH_P[4]
+    p = x2 * p + _TANH_P[3]
+    p = x2 * p + _TANH_P[2]
+    p = x2 * p + _TANH_P[1]
+    p = x2 * p + _TANH_P[0]
+    q = x2 * _TANH_Q[3] + _TANH_Q[2]
+    q = x2 * q + _TANH_Q[1]
+    q = x2 * q + _TANH_Q[0]
+    return x * p / q
+
+
+@numba.njit(fastmath=True, cache=True, inline="always", error_model="numpy")
+def _sigmoid(x):
+    return _HALF + _HALF * _tanh(_HALF * x)
+
+
+@numba.njit(cache=True)
+def _widen(bits, out_u32):
+    """bf16 bit patterns (int16) -> their float32 values' bit patterns."""
+    for j in range(bits.shape[0]):
+        out_u32[j] = (np.uint32(bits[j]) & 0xFFFF) << 16
+
+
+@numba.njit(cache=True)
+def _narrow(u32, out_bits):
+    """float32 bit patterns -> bf16 bit patterns (int16), rounding to nearest even."""
+    for j in range(u32.shape[0]):
+        u = u32[j]
+        out_bits[j] = (u + 0x7FFF + ((u >> 16) & 1)) >> 16
+
+
+@numba.njit(fastmath=True, cache=True, error_model="numpy")
+def _bf16_forward_step(t, z_bits, bias, w_peep, gates, cells, tanh_cells, hidden, xh_bits):
+    """Step t's gates and state from its pre-activation product ``z`` (bf16, (B, 4H)).
+
+    Writes gates[t] (post-activation, (B, 4, H)), cells[t + 1], tanh_cells[t],
+    hidden[t + 1] (float32) and, if another step follows, h_t's bf16 bits into
+    ``xh_bits[t + 1, :, F:]`` (the next product's operand).
+
+    One short loop per quantity over a row's H units, on purpose: LLVM vectorises a loop
+    only when it can check cheaply that its arrays don't overlap, and one loop writing
+    all seven outputs stayed scalar (4.7x slower).
+    """
+    _, B, _, H = gates.shape
+    F = xh_bits.shape[2] - H
+    z_u = np.empty(4 * H, np.uint32)
+    z = z_u.view(np.float32)
+    zi, zf, zg, zo = z[:H], z[H:2 * H], z[2 * H:3 * H], z[3 * H:]
+    h_u = np.empty(H, np.uint32)
+    h_f = h_u.view(np.float32)
+    b_i, b_f, b_g, b_o = bias[0], bias[1], bias[2], bias[3]
+    w_i, w_f, w_o = w_peep[0], w_peep[1], w_peep[2]
+    for b in range(B):
+        _widen(z_bits[b], z_u)
+        c = cells[t, b]
+        i, f, g, o = gates[t, b, 0], gates[t, b, 1], gates[t, b, 2], gates[t, b, 3]
+        c_new, tc, h = cells[t + 1, b], tanh_cells[t, b], hidden[t + 1, b]
+        for j in range(H):
+            i[j] = _sigmoid(zi[j] + b_i[j] + w_i[j] * c[j])
+        for j in range(H):
+            f[j] = _sigmoid(zf[j] + b_f[j] + w_f[j] * c[j])
+        for j in range(H):
+            g[j] = _tanh(zg[j] + b_g[j])
+        for j in range(H):
+            c_new[j] = f[j] * c[j] + i[j] * g[j]
+        for j in range(H):
+            o[j] = _sigmoid(zo[j] + b_o[j] + w_o[j] * c_new[j])
+        for j in range(H):
+            tc[j] = _tanh(c_new[j])
+        for j in range(H):
+            h[j] = o[j] * tc[j]
+        if t + 1 < xh_bits.shape[0]:
+            h_f[:] = h
+            _narrow(h_u, xh_bits[t + 1, b, F:])
+
+
+@numba.njit(fastmath=True, cache=True, error_model="numpy")
+def _bf16_backward_step(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec_bits,
+                        use_rec, dc, dg_bits, d_bias, d_peep):
+    """Step t of the backward recurrence, fused (short loops, as in the forward step).
+
+    ``dh = d_hidden[t] + rec``; rec is the bf16 product dg_{t+1} W_h, or at the last step
+    (``use_rec`` False) ``d_hn``, the gradient of the returned final h (float32). Updates
+    ``dc`` from dc_t to dc_{t-1} in place, writes the pre-activation gradients' bf16 bits
+    to ``dg_bits[t]`` ((B, 4H), gates i, f, g, o) and adds their float32 values into the
+    bias and peephole gradients.
+    """
+    _, B, _, H = gates.shape
+    rec_u = np.empty(H, np.uint32)
+    rec = rec_u.view(np.float32)
+    dz_u = np.empty(4 * H, np.uint32)
+    dz = dz_u.view(np.float32)
+    di, df, dg, do = dz[:H], dz[H:2 * H], dz[2 * H:3 * H], dz[3 * H:]
+    dh = np.empty(H, np.float32)
+    dct = np.empty(H, np.float32)
+    w_i, w_f, w_o = w_peep[0], w_peep[1], w_peep[2]
+    p_i, p_f, p_o = d_peep[0], d_peep[1], d_peep[2]
+    d_bias = d_bias.reshape(4 * H)
+    for b in range(B):
+        if use_rec:
+            _widen(rec_bits[b], rec_u)
+        else:
+            rec[:] = d_hn[b]
+        i, f, g, o = gates[t, b, 0], gates[t, b, 1], gates[t, b, 2], gates[t, b, 3]
+        tc, c_prev, c, dcb = tanh_cells[t, b], cells[t, b], cells[t + 1, b], dc[b]
+        dhb = d_hidden[t, b]
+        for j in range(H):
+            dh[j] = dhb[j] + rec[j]
+        for j in range(H):
+            do[j] = dh[j] * tc[j] * o[j] * (_ONE - o[j])
+        for j in range(H):
+            dct[j] = dcb[j] + dh[j] * o[j] * (_ONE - tc[j] * tc[j]) + do[j] * w_o[j]
+        for j in range(H):
+            di[j] = dct[j] * g[j] * i[j] * (_ONE - i[j])
+        for j in range(H):
+            df[j] = dct[j] * c_prev[j] * f[j] * (_ONE - f[j])
+        for j in range(H):
+            dg[j] = dct[j] * i[j] * (_ONE - g[j] * g[j])
+        for j in range(H):
+            dcb[j] = dct[j] * f[j] + di[j] * w_i[j] + df[j] * w_f[j]
+        for j in range(4 * H):
+            d_bias[j] += dz[j]
+        for j in range(H):
+            p_i[j] += di[j] * c_prev[j]
+        for j in range(H):
+            p_f[j] += df[j] * c_prev[j]
+        for j in range(H):
+            p_o[j] += do[j] * c[j]
+        _narrow(dz_u, dg_bits[t, b])
+
+
+def _bf16_forward_step_torch(t, z, bias, w_peep, gates, cells, tanh_cells, hidden, xh):
+    """:func:`_bf16_forward_step` with torch ops on bf16 tensors (non-CPU devices)."""
+    B, H = cells.shape[1:]
+    zf = z.view(B, 4, H).float() + bias.view(4, H)
+    c = cells[t]
+    i_f = torch.sigmoid(zf[:, :2] + w_peep[:2] * c.unsqueeze(1))
+    g = torch.tanh(zf[:, 2])
+    c_new = i_f[:, 1] * c + i_f[:, 0] * g
+    o = torch.sigmoid(zf[:, 3] + w_peep[2] * c_new)
+    tc = torch.tanh(c_new)
+    gates[t, :, :2] = i_f
+    gates[t, :, 2] = g
+    gates[t, :, 3] = o
+    cells[t + 1] = c_new
+    tanh_cells[t] = tc
+    torch.mul(o, tc, out=hidden[t + 1])
+    if t + 1 < xh.shape[0]:
+        xh[t + 1, :, xh.shape[2] - H:] = hidden[t + 1]
+
+
+def _bf16_backward_step_torch(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec,
+                              use_rec, dc, dg_out, d_bias, d_peep):
+    """:func:`_bf16_backward_step` with torch ops on bf16 tensors (non-CPU devices)."""
+    i, f, g, o = gates[t].unbind(1)
+    tc, c_prev = tanh_cells[t], cells[t]
+    dh = d_hidden[t] + (rec.float() if use_rec else d_hn)
+    do = dh * tc * o * (1 - o)
+    dc += dh * o * (1 - tc * tc) + do * w_peep[2]
+    di = dc * g * i * (1 - i)
+    df = dc * c_prev * f * (1 - f)
+    dg = dc * i * (1 - g * g)
+    dc.mul_(f).add_(di * w_peep[0] + df * w_peep[1])
+    dz = torch.stack([di, df, dg, do], 1)
+    dg_out[t] = dz.view(dz.shape[0], -1)
+    d_bias += dz.sum(0)
+    d_peep += torch.stack([(di * c_prev).sum(0), (df * c_prev).sum(0),
+                           (do * cells[t + 1]).sum(0)])
+
+
+class _PeepholeLSTMBF16Function(torch.autograd.Function):
+    """The bf16 path: :class:`_PeepholeLSTMFunction`'s math with bf16 matmuls.
+
+    Layout is batch-major, (T, B, 4, H) with gates i, f, g, o: one step's pre-activations
+    are ONE (B, F+H) x (F+H, 4H) product of ``[x_t, h_{t-1}]`` (kept as a bf16 buffer
+    ``xh``) with ``[W_x, W_h]^T`` -- input projection and recurrence together -- and every
+    weight gradient is one (4H, T B) x (T B, F+H) product after the loop (float32
+    accumulation inside oneDNN over all T B terms, one rounding at the end), instead of T
+    small ones. In float32: the saved gates, cell states and h, the cell-gradient
+    recurrence and the bias and peephole gradients. ``kernels`` is "numba" (CPU) or
+    "torch" (any device; also the reference the numba kernels are tested against).
+    """
+
+    @staticmethod
+    def forward(ctx, x, h0, c0, w_x, w_h, bias, w_peep, kernels="numba"):
+        T, B, F = x.shape
+        H = w_h.shape[1]
+        w_cat = torch.cat([w_x, w_h], 1).to(torch.bfloat16)        # (4H, F+H)
+        xh = x.new_empty(T, B, F + H, dtype=torch.bfloat16)        # [x_t, h_{t-1}]
+        xh[:, :, :F] = x
+        xh[0, :, F:] = h0
+        gates = x.new_empty(T, B, 4, H)
+        cells = x.new_empty(T + 1, B, H)       # cells[t] = c_{t-1}
+        hidden = x.new_empty(T + 1, B, H)      # hidden[t] = h_{t-1}
+        tanh_cells = x.new_empty(T, B, H)
+        cells[0] = c0
+        hidden[0] = h0
+        z = x.new_empty(B, 4 * H, dtype=torch.bfloat16)
+        w_t = w_cat.t().contiguous()         # a transposed view was 1.4x slower per step
+        bias4, w_peep = bias.detach().view(4, H), w_peep.detach()
+        if kernels == "numba":
+            step = _bf16_forward_step
+            arrays = (z.view(torch.int16).numpy(), bias4.numpy(), w_peep.numpy(),
+                      gates.numpy(), cells.numpy(), tanh_cells.numpy(), hidden.numpy(),
+                      xh.view(torch.int16).numpy())
+        else:
+            step = _bf16_forward_step_torch
+            arrays = (z, bias4, w_peep, gates, cells, tanh_cells, hidden, xh)
+        for t in range(T):
+            torch.mm(xh[t], w_t, out=z)
+            step(t, *arrays)
+        ctx.save_for_backward(xh, w_x, w_h, w_peep, gates, cells, tanh_cells)
+        ctx.kernels = kernels
+        h_seq = hidden[1:]
+        return h_seq, h_seq[-1].clone(), cells[-1].clone()
+
+    @staticmethod
+    @once_differentiable
+    def backward(ctx, d_hidden, d_hn, d_cn):
+        xh, w_x, w_h, w_peep, gates, cells, tanh_cells = ctx.saved_tensors
+        T, B, _, H = gates.shape
+        F = w_x.shape[1]
+        d_hidden = torch.zeros_like(tanh_cells) if d_hidden is None else d_hidden.contiguous()
+        d_hn = torch.zeros_like(cells[0]) if d_hn is None else d_hn.contiguous()
+        dc = d_cn.clone().contiguous() if d_cn is not None else torch.zeros_like(cells[0])
+        w_h16 = w_h.detach().to(torch.bfloat16).contiguous()          # (4H, H)
+        d_gates = gates.new_empty(T, B, 4 * H, dtype=torch.bfloat16)
+        rec = gates.new_zeros(B, H, dtype=torch.bfloat16)           # dg_{t+1} W_h
+        d_bias = gates.new_zeros(4, H)
+        d_peep = gates.new_zeros(3, H)
+        if ctx.kernels == "numba":
+            step = _bf16_backward_step
+            arrays = (gates.numpy(), cells.numpy(), tanh_cells.numpy(), w_peep.numpy(),
+                      d_hidden.numpy(), d_hn.numpy(), rec.view(torch.int16).numpy())
+            state = (dc.numpy(), d_gates.view(torch.int16).numpy(), d_bias.numpy(),
+                     d_peep.numpy())
+        else:
+            step = _bf16_backward_step_torch
+            arrays = (gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec)
+            state = (dc, d_gates, d_bias, d_peep)
+        for t in range(T - 1, -1, -1):
+            step(t, *arrays, t < T - 1, *state)
+            torch.mm(d_gates[t], w_h16, out=rec)
+        dh0 = rec.float()
+        dg_all = d_gates.view(T * B, 4 * H)
+        d_w = torch.mm(dg_all.t(), xh.view(T * B, F + H)).float()   # [dW_x, dW_h]
+        d_x = None
+        if ctx.needs_input_grad[0]:
+            d_x = torch.mm(dg_all, w_x.detach().to(torch.bfloat16)).float().view(T, B, F)
+        return (d_x, dh0, dc, d_w[:, :F].contiguous(), d_w[:, F:].contiguous(),
+                d_bias.view(4 * H), d_peep, None)
+
+
 class PeepholeLSTM(nn.Module):
     """Single-layer LSTM with peepholes and forget gates (Graves 2013), time-major.
 
@@ -170,6 +464,14 @@ class PeepholeLSTM(nn.Module):
     forget_bias : float, default 1.0
         Initial forget-gate bias, so memory is kept by default early in training
         (Gers et al. 2000; Jozefowicz et al. 2015).
+    precision : {"fp32", "bf16"}, default "fp32"
+        Matmul precision of the training path. With "bf16", a forward pass that autograd
+        records (and its backward) runs every matmul in bfloat16 -- on the CPU's AMX
+        units -- while the cell state, the gate nonlinearities, h, the losses and all
+        gradient accumulation stay float32; the parameters themselves stay float32 (Adam's
+        master weights). A forward pass autograd does not record (under
+        ``torch.no_grad()``: evaluation, validation, ``record``) always runs float32, so
+        a network behaves the same however it was trained.
 
     Attributes
     ----------
@@ -187,7 +489,8 @@ class PeepholeLSTM(nn.Module):
     torch.Size([5, 2, 16])
     """
 
-    def __init__(self, input_size: int, hidden_size: int = 256, forget_bias: float = 1.0):
+    def __init__(self, input_size: int, hidden_size: int = 256, forget_bias: float = 1.0,
+                 precision: str = "fp32"):
         super().__init__()
         if int(input_size) < 1:
             raise ValueError(f"`input_size` must be >= 1; got {input_size}")
@@ -200,7 +503,17 @@ class PeepholeLSTM(nn.Module):
         self.bias = nn.Parameter(torch.zeros(4 * H))
         self.weight_peephole = nn.Parameter(torch.zeros(3, H))
         self.forget_bias = float(forget_bias)
+        self.precision = precision
         self.reset_parameters()
+
+    @property
+    def precision(self) -> str:
+        """"fp32" or "bf16": the matmul precision of the training path (see class doc)."""
+        return self._precision
+
+    @precision.setter
+    def precision(self, value: str):
+        self._precision = check_option("precision", value, PRECISIONS)
 
     def reset_parameters(self):
         """Uniform(-1/sqrt(H), 1/sqrt(H)) weights as torch.nn.LSTM; forget bias set."""
@@ -237,12 +550,18 @@ class PeepholeLSTM(nn.Module):
                 if tuple(v.shape) != (B, self.hidden_size):
                     raise ValueError(f"`state` {name} must have shape ({B}, "
                                      f"{self.hidden_size}); got {tuple(v.shape)}")
-        h_seq, h_n, c_n = _PeepholeLSTMFunction.apply(
-            x, h0, c0, self.weight_x, self.weight_h, self.bias, self.weight_peephole)
+        args = (x, h0, c0, self.weight_x, self.weight_h, self.bias, self.weight_peephole)
+        if (self.precision == "bf16" and torch.is_grad_enabled()
+                and any(a.requires_grad for a in args)):
+            kernels = "numba" if x.device.type == "cpu" else "torch"
+            h_seq, h_n, c_n = _PeepholeLSTMBF16Function.apply(*args, kernels)
+        else:
+            h_seq, h_n, c_n = _PeepholeLSTMFunction.apply(*args)
         return h_seq, (h_n, c_n)
 
     def extra_repr(self) -> str:
-        return f"{self.input_size}, hidden_size={self.hidden_size}, peepholes=True"
+        return (f"{self.input_size}, hidden_size={self.hidden_size}, peepholes=True, "
+                f"precision={self.precision!r}")
 
 
 def reference_peephole_lstm(x, h0, c0, weight_x, weight_h, bias, weight_peephole):

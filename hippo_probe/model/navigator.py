@@ -31,7 +31,8 @@ class Navigator(nn.Module):
         self.config = config
         self.register_buffer("input_scale",
                              torch.tensor(config.input_scale, dtype=torch.float32))
-        self.lstm = PeepholeLSTM(config.input_size, config.hidden_size, config.forget_bias)
+        self.lstm = PeepholeLSTM(config.input_size, config.hidden_size, config.forget_bias,
+                                 precision=config.precision)
         self.position = nn.Linear(config.hidden_size, 2)
         self.classifier = nn.Linear(config.hidden_size, config.n_classes) \
             if config.n_classes else None

@@ -4,6 +4,7 @@ from ..tasks import TASKS
 
 
 def add_commands(sub):
+    from ..model.config import PRECISIONS
     from .config import TrainConfig
     d = TrainConfig()
     p = sub.add_parser("train", help="train (or resume) a network; see TrainConfig")
@@ -20,6 +21,9 @@ def add_commands(sub):
     p.add_argument("--test-trials", type=int, default=d.n_test)
     p.add_argument("--checkpoint-minutes", type=float, default=d.checkpoint_minutes)
     p.add_argument("--threads", type=int, default=d.threads)
+    p.add_argument("--precision", choices=PRECISIONS, default=d.precision,
+                   help="matmul precision of training (bf16: AMX matmuls, float32 state "
+                        f"and optimizer; default {d.precision})")
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the task's splits")
     p.add_argument("--init-seed", type=int, default=d.init_seed)
     p.add_argument("--class-weight", type=float, default=None)
@@ -64,7 +68,8 @@ def _train(a):
                          n_validation=a.validation_trials, n_test=a.test_trials,
                          checkpoint_minutes=a.checkpoint_minutes, threads=a.threads,
                          seed=a.seed, init_seed=a.init_seed, class_weight=a.class_weight,
-                         init_from=a.init_from, train_only=a.train_only)
+                         init_from=a.init_from, train_only=a.train_only,
+                         precision=a.precision)
     log = fit(config, a.out, progress=not a.no_progress, cache_dir=a.cache_dir)
     if "test" in log:
         print(json.dumps(log["test"], indent=1))

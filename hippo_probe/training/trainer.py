@@ -29,6 +29,7 @@ from ..tasks import make_trials, task_config
 from .checkpoint import load, save_atomic
 from .config import TrainConfig
 from .data import TrainingTrials
+from .memory import reuse_freed_memory
 
 
 def class_weight_rule(target_var: float, n_classes: int) -> float:
@@ -48,7 +49,8 @@ def build_network(config: TrainConfig) -> Navigator:
     if config.train_only == "classifier":
         n_classes = task_config("specialized").n_arenas
     model_config = ModelConfig(hidden_size=config.hidden_size, n_classes=n_classes,
-                               input_scale=input_scale_for(task.world))
+                               input_scale=input_scale_for(task.world),
+                               precision=config.precision)
     torch.manual_seed(config.init_seed)
     net = Navigator(model_config)
     net.base_network = None
@@ -186,6 +188,9 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
         stop_after: int | None = None) -> dict:
     """Train (or resume training) a network; returns the training log.
 
+    The process's torch and numba threads are pinned to ``config.threads`` for the run, and
+    malloc keeps freed activations for the next step (:func:`.memory.reuse_freed_memory`).
+
     Files in ``run_dir``: ``checkpoint.pt`` (everything needed to resume; written
     atomically every ``checkpoint_minutes`` and at the end), ``network.pt`` (the best
     parameters by validation loss, loadable by :func:`hippo_probe.load_pretrained`) and
@@ -210,6 +215,7 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
         numba.set_num_threads(min(config.threads, numba.config.NUMBA_NUM_THREADS))
     except Exception:  # numba threading layer not initialisable: serial is fine
         pass
+    reuse_freed_memory()    # each step's activations, reused instead of page-faulted anew
     try:
         return _fit(config, Path(run_dir), rank, world, progress, cache_dir, stop_after)
     finally:

@@ -8,32 +8,9 @@ import pytest
 from scipy import stats
 
 from hippo_probe.baselines import particle_filter, path_integration
+from hippo_probe.baselines.calibration import posterior_ranks
 from hippo_probe.tasks import TASKS, make_trials, task_config
 from hippo_probe.world import WORLDS, NoiseModel, random_arena, regular_polygon
-
-
-def mahalanobis_rank(res, truth):
-    """Posterior mass of the particles closer to the weighted mean (in the particles' own
-    Mahalanobis metric) than the truth: uniform on [0, 1] for a calibrated filter, whatever
-    the posterior's shape."""
-    p, w = res.particles, res.particle_weights                     # (K, B, N, 2), (K, B, N)
-    mean = np.einsum("kbn,kbnd->kbd", w, p)
-    d = p - mean[:, :, None]
-    cov = np.einsum("kbn,kbnd,kbne->kbde", w, d, d)
-    inv = np.linalg.inv(cov + 1e-12 * np.eye(2))
-    own = np.einsum("kbnd,kbde,kbne->kbn", d, inv, d)
-    e = truth - mean
-    true = np.einsum("kbd,kbde,kbe->kb", e, inv, e)
-    return np.sum(w * (own < true[..., None]), axis=-1).ravel()
-
-
-def projection_rank(res, truth, rng):
-    """Posterior mass below the truth along a random direction: uniform if calibrated."""
-    angle = rng.uniform(0, 2 * np.pi, truth.shape[:2])
-    u = np.stack([np.cos(angle), np.sin(angle)], axis=-1)
-    own = np.einsum("kbnd,kbd->kbn", res.particles, u)
-    true = np.einsum("kbd,kbd->kb", truth, u)
-    return np.sum(res.particle_weights * (own < true[..., None]), axis=-1).ravel()
 
 
 def test_error_stays_bounded_while_pi_drifts():
@@ -46,13 +23,6 @@ def test_error_stays_bounded_while_pi_drifts():
     assert pf.max() < 0.1                                   # within 10 cm all along
 
 
-def drift_rank(res, truth):
-    """Posterior mass of the drift hypotheses below the true drift: uniform if
-    calibrated."""
-    return np.sum(res.particle_weights * (res.particle_drifts < truth[..., None]),
-                  axis=-1).ravel()
-
-
 @pytest.mark.parametrize("world", WORLDS)
 @pytest.mark.parametrize("task", TASKS)
 def test_calibrated(task, world):
@@ -62,14 +32,11 @@ def test_calibrated(task, world):
     keep = np.arange(25, 500, 50)
     batch = make_trials(task, 60, "validation", 0, world=world)
     res = particle_filter(batch, keep=keep)
-    truth = batch.position[keep]
-    rng = np.random.default_rng(0)
-    ranks = [mahalanobis_rank(res, truth), projection_rank(res, truth, rng)]
-    if world == "darkness":
-        ranks.append(drift_rank(res, batch.heading_drift[keep]))
-    else:
+    ranks = posterior_ranks(res, batch)
+    if world == "compass":
         assert (res.particle_drifts == 0).all() and (res.drift_sd == 0).all()
-    for rank in ranks:
+        del ranks["drift"]
+    for rank in ranks.values():
         assert stats.kstest(rank, "uniform").pvalue > 0.01
         # and the 90% highest-rank region holds the truth 90% of the time
         assert abs(np.mean(rank < 0.9) - 0.9) < 0.05

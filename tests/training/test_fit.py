@@ -15,8 +15,9 @@ from hippo_probe.errors import CheckpointError
 from hippo_probe.training import TrainConfig, class_weight_rule, fit
 from hippo_probe.training.data import TrainingTrials
 
+# float32 named explicitly: these tests stay float32 whichever precision is the default
 TINY = dict(task="specialized", n_trials=48, steps=6, batch_size=8, hidden_size=8,
-            validate_every=3, n_validation=8, n_test=8, threads=1)
+            validate_every=3, n_validation=8, n_test=8, threads=1, precision="fp32")
 
 
 def _params(path):
@@ -69,6 +70,66 @@ def test_resume_after_interruption_gives_identical_parameters(uninterrupted, tmp
                  _params(d / "run" / "checkpoint.pt"))
     ref = json.loads((d / "run" / "log.json").read_text())
     assert [e["loss"] for e in log["train"]] == [e["loss"] for e in ref["train"]]
+
+
+@pytest.fixture(scope="module")
+def uninterrupted_bf16(tmp_path_factory):
+    d = tmp_path_factory.mktemp("run_bf16")
+    log = fit(TrainConfig(**{**TINY, "precision": "bf16"}), d / "run",
+              cache_dir=d / "cache", progress=False)
+    return d, log
+
+
+def test_resumed_bf16_run_equals_an_uninterrupted_one(uninterrupted, uninterrupted_bf16,
+                                                      tmp_path):
+    d, log_bf16 = uninterrupted_bf16
+    config = TrainConfig(**{**TINY, "precision": "bf16"})
+    fit(config, tmp_path / "run", cache_dir=d / "cache", progress=False, stop_after=4)
+    log = fit(config, tmp_path / "run", cache_dir=d / "cache", progress=False)
+    assert log["resumed_at"] == [4]
+    for name in ("network.pt", "checkpoint.pt"):
+        _assert_same(_params(tmp_path / "run" / name), _params(d / "run" / name))
+    assert [e["loss"] for e in log["train"]] == [e["loss"] for e in log_bf16["train"]]
+    # the precision is in the log and the checkpoint; parameters are float32 regardless
+    saved = json.loads((d / "run" / "log.json").read_text())
+    assert saved["config"]["precision"] == saved["model_config"]["precision"] == "bf16"
+    ckpt = torch.load(d / "run" / "checkpoint.pt", weights_only=False)
+    assert ckpt["config"]["precision"] == "bf16"
+    assert all(v.dtype == torch.float32 for v in ckpt["model"].values())
+    # bf16 training really ran (its losses differ from float32's) but validation and test
+    # are float32 evaluations: the shipped network behaves the same whatever trained it
+    fp32_log = uninterrupted[1]
+    assert [e["loss"] for e in log_bf16["train"]] != [e["loss"] for e in fp32_log["train"]]
+    assert log_bf16["train"][0]["loss"] == pytest.approx(fp32_log["train"][0]["loss"],
+                                                         rel=2.0 ** -6)
+    net = hp.load_pretrained(d / "run" / "network.pt")
+    assert net.lstm.precision == "fp32" and net.info["config"]["precision"] == "bf16"
+
+
+def test_resume_refuses_another_precision(uninterrupted, tmp_path):
+    d, _ = uninterrupted
+    with pytest.raises(ValueError, match=r"precision: checkpoint 'fp32', got 'bf16'"):
+        fit(TrainConfig(**{**TINY, "precision": "bf16"}), d / "run", cache_dir=d / "cache",
+            progress=False)
+    # a checkpoint written before `precision` existed was trained in float32
+    old = TrainConfig(**TINY).to_dict()
+    del old["precision"]
+    assert TrainConfig.from_dict(old).precision == "fp32"
+    with pytest.raises(ValueError, match="`precision` must be one of"):
+        TrainConfig(precision="fp16")
+
+
+def test_train_command_takes_precision(uninterrupted, tmp_path):
+    from hippo_probe.cli import build_parser, main
+    d, _ = uninterrupted
+    args = ["train", "--task", "specialized", "--trials", "16", "--steps", "2",
+            "--batch-size", "8", "--hidden-size", "8", "--validate-every", "2",
+            "--validation-trials", "8", "--test-trials", "8", "--no-progress",
+            "--cache-dir", str(d / "cache"), "--out", str(tmp_path / "run")]
+    assert build_parser().parse_args(args).precision == TrainConfig().precision
+    assert main([*args, "--precision", "bf16"]) == 0
+    saved = json.loads((tmp_path / "run" / "log.json").read_text())
+    assert saved["config"]["precision"] == "bf16"
 
 
 def test_kill_and_resume(uninterrupted, tmp_path):

@@ -77,7 +77,7 @@ def load_pretrained(name: str):
     net = Navigator(dataclasses.replace(config, precision="fp32"))
     net.load_state_dict(obj.get("best_model") or obj["model"])
     net.task = obj.get("task")
-    net.world = obj.get("world") or LEGACY_WORLD
+    net.world = obj.get("world") or (obj.get("config") or {}).get("world") or LEGACY_WORLD
     net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test",
                                         "steps_done", "finished", "base_network")}
     net.info["world"] = net.world

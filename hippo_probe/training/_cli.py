@@ -1,6 +1,7 @@
 """``hippo-probe train`` and ``hippo-probe evaluate``."""
 
 from ..tasks import TASKS
+from ..world.config import WORLDS
 
 
 def add_commands(sub):
@@ -9,6 +10,9 @@ def add_commands(sub):
     d = TrainConfig()
     p = sub.add_parser("train", help="train (or resume) a network; see TrainConfig")
     p.add_argument("--task", required=True, choices=TASKS)
+    p.add_argument("--world", choices=WORLDS, default=d.world,
+                   help=f"world of the trials (default {d.world}, the study's; compass: "
+                        f"no heading drift)")
     p.add_argument("--trials", type=int, default=None,
                    help="training-set size (default: the study's, 5k/300k/250k)")
     p.add_argument("--steps", type=int, default=d.steps, help="optimizer steps (budget)")
@@ -44,6 +48,8 @@ def add_commands(sub):
     e.add_argument("--seed", type=int, default=0)
     e.add_argument("--task", default=None, choices=TASKS,
                    help="evaluate on another task than the network's own")
+    e.add_argument("--world", default=None, choices=WORLDS,
+                   help="evaluate in another world than the network's own")
     e.set_defaults(run=_evaluate)
 
 
@@ -62,7 +68,7 @@ def _train(a):
     from .config import TrainConfig
     from .trainer import fit
 
-    config = TrainConfig(task=a.task, n_trials=a.trials, steps=a.steps,
+    config = TrainConfig(task=a.task, world=a.world, n_trials=a.trials, steps=a.steps,
                          batch_size=a.batch_size, lr=a.lr, lr_final=a.lr_final,
                          hidden_size=a.hidden_size, validate_every=a.validate_every,
                          n_validation=a.validation_trials, n_test=a.test_trials,
@@ -86,11 +92,13 @@ def _evaluate(a):
 
     net = load_pretrained(a.checkpoint)
     task = a.task or net.task
-    batch = make_trials(task, a.trials, a.split, a.seed)
+    world = a.world or net.world
+    batch = make_trials(task, a.trials, a.split, a.seed, world=world)
     weight = (net.info.get("class_weight") or 0.0)
     # score the readout in the frame of the task the network was trained on
     start_relative = task_config(net.task).target == "start_relative"
     target = batch.position - batch.start[None] if start_relative else batch.position
     metrics = summarize(evaluate_network(net, batch, weight, target=target), batch.dt)
-    print(json.dumps({"network": str(a.checkpoint), "task": task, "split": a.split,
+    print(json.dumps({"network": str(a.checkpoint), "task": task, "world": world,
+                      "network_world": net.world, "split": a.split,
                       "trials": a.trials, **metrics}, indent=1))

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from .._validators import check_number, check_option, check_positive
 from ..model.config import PRECISIONS
 from ..tasks import TASKS
+from ..world.config import WORLDS
 
 
 @dataclass(frozen=True)
@@ -18,6 +19,9 @@ class TrainConfig:
     ----------
     task : str
         "localization", "generalized" or "specialized".
+    world : str
+        "darkness" (the study's world, the default) or "compass": the world of every
+        trial the run trains, validates and tests on. Saved with the network.
     n_trials : int or None
         Training-set size (trials 0 .. n-1 of the train split); None = the study's size
         (5,000 / 300,000 / 250,000).
@@ -64,6 +68,7 @@ class TrainConfig:
     """
 
     task: str = "generalized"
+    world: str = "darkness"
     n_trials: int | None = None
     steps: int = 5000
     batch_size: int = 64
@@ -89,6 +94,7 @@ class TrainConfig:
 
     def __post_init__(self):
         check_option("task", self.task, TASKS)
+        check_option("world", self.world, WORLDS)
         if self.n_trials is not None:
             check_positive("n_trials", self.n_trials, integer=True)
         for name in ("steps", "batch_size", "validate_every", "n_validation", "n_test", "threads",
@@ -126,6 +132,7 @@ class TrainConfig:
     @classmethod
     def from_dict(cls, d: dict) -> "TrainConfig":
         names = {f.name for f in dataclasses.fields(cls)}
-        # runs saved before `precision` existed were all float32, whatever the default now
-        d = {"precision": "fp32", **d}
+        # runs saved before `precision` and `world` existed were all float32 and all of the
+        # compass world, whatever the defaults now
+        d = {"precision": "fp32", "world": "compass", **d}
         return cls(**{k: v for k, v in d.items() if k in names})

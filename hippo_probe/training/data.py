@@ -17,9 +17,10 @@ from ..tasks import CACHE_CHUNK, cached_trials
 class TrainingTrials:
     """Batches of the first ``n_trials`` train-split trials of a task, by step."""
 
-    def __init__(self, task: str, n_trials: int, batch_size: int, *, seed: int = 0,
-                 init_seed: int = 0, cache_dir=None):
+    def __init__(self, task: str, n_trials: int, batch_size: int, *, world="darkness",
+                 seed: int = 0, init_seed: int = 0, cache_dir=None):
         self.task, self.n_trials, self.batch_size = task, n_trials, batch_size
+        self.world = world
         self.seed, self.init_seed, self.cache_dir = seed, init_seed, cache_dir
         self.batches_per_epoch = max(n_trials // batch_size, 1)
         self._order_epoch = None
@@ -51,7 +52,7 @@ class TrainingTrials:
             lo = block * CACHE_CHUNK
             n = min(CACHE_CHUNK, self.n_trials - lo)
             self._blocks[block] = cached_trials(self.task, n, "train", self.seed, first=lo,
-                                                cache_dir=self.cache_dir)
+                                                cache_dir=self.cache_dir, world=self.world)
         return self._blocks[block]
 
     def batch(self, indices: np.ndarray):

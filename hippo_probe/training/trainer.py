@@ -44,7 +44,7 @@ def class_weight_rule(target_var: float, n_classes: int) -> float:
 
 
 def build_network(config: TrainConfig) -> Navigator:
-    task = task_config(config.task)
+    task = task_config(config.task, config.world)
     n_classes = task.n_classes if (task.classify or config.train_only == "classifier") else 0
     if config.train_only == "classifier":
         n_classes = task_config("specialized").n_arenas
@@ -58,6 +58,11 @@ def build_network(config: TrainConfig) -> Navigator:
         from ..pretrained import resolve_network_file
         path = resolve_network_file(config.init_from)
         obj = load(path)
+        base_world = obj.get("world") or (obj.get("config") or {}).get("world") or "compass"
+        if base_world != config.world:
+            raise ValueError(f"`init_from` {config.init_from!r} was trained in the "
+                             f"{base_world!r} world; this run is of the {config.world!r} "
+                             f"world (`world`)")
         state = obj.get("best_model") or obj["model"]
         own = net.state_dict()
         wrong = {k: (tuple(v.shape), tuple(own[k].shape)) for k, v in state.items()
@@ -224,7 +229,7 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
 
 def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
     run_dir.mkdir(parents=True, exist_ok=True)
-    task = task_config(config.task)
+    task = task_config(config.task, config.world)
     n_trials = config.n_trials or task.train_trials
     if config.batch_size % world:
         raise ValueError(f"`batch_size` must be divisible by the world size ({world}); "
@@ -233,8 +238,8 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
     net = build_network(config).to(device)
     params = [p for p in net.parameters() if p.requires_grad]
     opt = torch.optim.Adam(params, lr=config.lr)
-    validation = make_trials(config.task, config.n_validation, "validation", config.seed) \
-        if rank == 0 else None
+    validation = make_trials(config.task, config.n_validation, "validation", config.seed,
+                             world=config.world) if rank == 0 else None
     classify = net.classifier is not None
     classifier_only = config.train_only == "classifier"
     if classifier_only:
@@ -243,7 +248,7 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
         class_weight = config.class_weight
     elif classify:
         target_var = make_trials(config.task, config.n_validation, "validation",
-                                 config.seed).target if validation is None else \
+                                 config.seed, world=config.world).target if validation is None else \
             validation.target
         class_weight = class_weight_rule(float(np.mean(target_var ** 2)),
                                          net.config.n_classes)
@@ -275,7 +280,8 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
     train_net = net
     if world > 1:
         train_net = torch.nn.parallel.DistributedDataParallel(net)
-    data = TrainingTrials(config.task, n_trials, config.batch_size, seed=config.seed,
+    data = TrainingTrials(config.task, n_trials, config.batch_size, world=config.world,
+                          seed=config.seed,
                           init_seed=config.init_seed, cache_dir=cache_dir)
 
     def checkpoint(model_state=None):
@@ -358,7 +364,7 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
             validate()
         last_state = {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}
         net.load_state_dict(best_state)
-        test = make_trials(config.task, config.n_test, "test", config.seed)
+        test = make_trials(config.task, config.n_test, "test", config.seed, world=config.world)
         metrics = evaluate_network(net, test, class_weight)
         log["test"] = summarize(metrics, test.dt)
         log["test_curves"] = {k: v.tolist() for k, v in metrics.items()
@@ -374,8 +380,9 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
 
 
 def save_network(net, config: TrainConfig, log: dict, path) -> None:
-    """Save a trained network (parameters, architecture, task) for ``load_pretrained``."""
+    """Save a trained network (parameters, architecture, task, world) for
+    ``load_pretrained``."""
     save_atomic({"model": {k: v.detach().cpu() for k, v in net.state_dict().items()},
-                 "model_config": net.config, "task": config.task,
+                 "model_config": net.config, "task": config.task, "world": config.world,
                  "config": config.to_dict(), "class_weight": log.get("class_weight"),
                  "test": log.get("test"), "base_network": log.get("base_network")}, path)

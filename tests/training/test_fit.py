@@ -238,3 +238,32 @@ def test_bad_configs_and_checkpoints(tmp_path):
         hp.load_pretrained(bad)
     with pytest.raises(ValueError, match="shipped networks"):
         hp.load_pretrained("no-such-network")
+
+
+def test_a_network_knows_its_world(uninterrupted, tmp_path):
+    """A run trains in its world (darkness by default) and ships it with the network;
+    shipped networks made before the darkness world are the compass world's; a readout
+    retrained in one world refuses a base network of the other."""
+    d, _ = uninterrupted
+    from hippo_probe.training import export_network
+    pt, _ = export_network(d / "run", "tiny_world", dest=tmp_path)
+    assert hp.load_pretrained(pt).world == "darkness"
+    assert hp.load_pretrained(d / "run" / "checkpoint.pt").world == "darkness"
+    assert hp.load_pretrained("generalized_compass").world == "compass"
+    cfg = TrainConfig(**dict(TINY, world="compass", init_from=str(pt),
+                             train_only="classifier", steps=1))
+    with pytest.raises(ValueError, match="trained in the 'darkness' world; this run is of "
+                                         "the 'compass' world"):
+        fit(cfg, tmp_path / "readout", cache_dir=d / "cache", progress=False)
+    with pytest.raises(ValueError, match="`world` must be one of"):
+        TrainConfig(world="moon")
+    # logs of runs from before the world existed read as compass runs
+    assert TrainConfig.from_dict({"task": "generalized"}).world == "compass"
+
+
+def test_a_shipped_name_not_trained_yet_is_a_clear_error():
+    from hippo_probe.pretrained import HERE
+    if (HERE / "generalized.pt").exists():
+        pytest.skip("the darkness world's generalized network is shipped")
+    with pytest.raises(ValueError, match="'generalized' is not shipped in this version"):
+        hp.load_pretrained("generalized")

@@ -48,7 +48,9 @@ _LAZY_ATTRS = {
     "classification_accuracy": "hippo_probe.analysis",
     "AnalysisWarning": "hippo_probe.analysis",
     # torch-backed
-    "record": "hippo_probe.model",
+    # from its own module: importing the submodule hippo_probe.model.record (as the
+    # `record` command does) rebinds the package attribute `record` to the module
+    "record": "hippo_probe.model.record",
     "load_pretrained": "hippo_probe.pretrained",
 }
 _SUBMODULES = {

@@ -90,6 +90,11 @@ def build_network(config: TrainConfig) -> Navigator:
     return net
 
 
+def _plain(model_config) -> dict:
+    """A ModelConfig as plain values (what checkpoints store)."""
+    return vars(model_config) | {"input_scale": list(model_config.input_scale)}
+
+
 def _command_line() -> str:
     """The command as typed: the program's name, not its path on the trainer's machine."""
     return " ".join([Path(sys.argv[0]).name, *sys.argv[1:]])
@@ -257,9 +262,9 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
 
     ckpt_path = run_dir / "checkpoint.pt"
     log = {"config": config.to_dict(), "n_trials": n_trials, "class_weight": class_weight,
-           "model_config": vars(net.config) | {"input_scale": list(net.config.input_scale)},
+           "model_config": _plain(net.config),
            "base_network": net.base_network,
-           "package_version": __version__, "torch_version": torch.__version__,
+           "package_version": __version__, "torch_version": str(torch.__version__),
            "command": _command_line(), "world_size": world, "train": [],
            "validation": [], "wall_time_s": 0.0}
     step, best_loss, best_state = 0, math.inf, None
@@ -284,12 +289,14 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
                           seed=config.seed,
                           init_seed=config.init_seed, cache_dir=cache_dir)
 
+    model_config = _plain(net.config)      # plain values: loadable with weights_only
+
     def checkpoint(model_state=None):
         if rank == 0:
             save_atomic({"model": model_state or net.state_dict(),
                          "optimizer": opt.state_dict(), "step": step,
                          "best_loss": best_loss, "best_model": best_state,
-                         "config": config.to_dict(), "model_config": net.config,
+                         "config": config.to_dict(), "model_config": model_config,
                          "task": config.task, "log": log}, ckpt_path)
 
     def validate():
@@ -383,6 +390,7 @@ def save_network(net, config: TrainConfig, log: dict, path) -> None:
     """Save a trained network (parameters, architecture, task, world) for
     ``load_pretrained``."""
     save_atomic({"model": {k: v.detach().cpu() for k, v in net.state_dict().items()},
-                 "model_config": net.config, "task": config.task, "world": config.world,
+                 "model_config": _plain(net.config), "task": config.task,
+                 "world": config.world,
                  "config": config.to_dict(), "class_weight": log.get("class_weight"),
                  "test": log.get("test"), "base_network": log.get("base_network")}, path)

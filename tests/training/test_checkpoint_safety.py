@@ -1,0 +1,60 @@
+"""A checkpoint never runs code: a crafted pickle is refused before its payload runs."""
+
+import os
+
+import pytest
+import torch
+
+import hippo_probe as hp
+from hippo_probe.errors import CheckpointError
+from hippo_probe.training.checkpoint import load
+
+
+class _Payload:
+    """Pickles as a call of ``os.system``: what a malicious ``.pt`` would hold."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return (os.system, (f"touch {self.marker}",))
+
+
+@pytest.fixture
+def crafted(tmp_path):
+    marker = tmp_path / "pwned"
+    path = tmp_path / "network.pt"
+    torch.save({"model": {"w": torch.zeros(2)}, "model_config": _Payload(marker)}, path)
+    return path, marker
+
+
+def test_a_crafted_checkpoint_is_refused_and_its_payload_never_runs(crafted):
+    path, marker = crafted
+    with pytest.raises(CheckpointError, match="refused without running anything"):
+        load(path)
+    with pytest.raises(CheckpointError, match="os.system|posix.system"):
+        hp.load_pretrained(path)
+    assert not marker.exists()
+
+
+def test_every_loading_path_of_the_cli_refuses_it(crafted, tmp_path):
+    from hippo_probe.cli import main
+
+    path, marker = crafted
+    assert main(["evaluate", str(path), "--trials", "1"]) != 0
+    assert main(["record", "--network", str(path), "--trials", "1",
+                 "--out", str(tmp_path / "rec.zarr")]) != 0
+    assert not marker.exists()
+
+
+def test_shipped_networks_load_without_unpickling_code():
+    for name in ("localization_compass", "generalized_compass", "specialized_compass",
+                 "generalized_compass_readout"):
+        assert hp.load_pretrained(name).world == "compass"
+
+
+def test_record_stays_a_function_after_its_module_is_imported():
+    import importlib
+
+    importlib.import_module("hippo_probe.model.record")
+    assert callable(hp.record)

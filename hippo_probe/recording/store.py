@@ -195,13 +195,23 @@ def save_recording(rec, path, overwrite=False, *, config=DEFAULTS, storage_optio
     tmp = dest.parent / f".{dest.name}{_PARTIAL}{os.getpid()}-{uuid.uuid4().hex[:8]}"
     try:
         _write(rec, str(tmp), config)
-        if dest.exists():
+        if dest.exists() and overwrite:
             old = dest.parent / f".{dest.name}{_OLD}{uuid.uuid4().hex[:8]}"
             os.rename(dest, old)
             os.rename(tmp, dest)
             shutil.rmtree(old, ignore_errors=True)
         else:
-            os.rename(tmp, dest)     # fails if something appeared at dest meanwhile
+            # another writer may have finished at `dest` while this one wrote: without
+            # `overwrite` its store is kept and this write refused (a rename onto a
+            # non-empty directory fails, so the check-then-rename race cannot replace it)
+            try:
+                if dest.exists() or dest.is_symlink():
+                    raise FileExistsError
+                os.rename(tmp, dest)
+            except OSError:
+                raise FileExistsError(f"`path` appeared while the recording was being "
+                                      f"written (another writer?): {dest}; it was kept. "
+                                      f"Pass overwrite=True to replace it") from None
         _remove_stale(dest)          # e.g. a copy set aside by an overwrite that died
     finally:
         if tmp.exists():

@@ -100,3 +100,42 @@ def test_killed_writer_leaves_previous_store_or_nothing(tmp_path):
     assert sorted(os.listdir(tmp_path)) == [
         "replaced.zarr", "swapped.zarr", "swapped.zarr.flag", "writer.py"]
     assert np.isfinite(open_recording(swapped).activity.values).all()
+
+
+CONCURRENT = textwrap.dedent("""
+    import sys, time
+    import numpy as np
+    from hippo_probe.recording import from_arrays, save_recording
+    import hippo_probe.recording.store as store
+
+    dest, value, start = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
+    n = 20_000
+    rec = from_arrays(np.arange(n) * 0.01, np.zeros((n, 2)),
+                      activity=np.full((n, 4), value, dtype=np.float32))
+    write = store._write
+    def slow_write(*args):     # both writers past the existence check before either ends
+        write(*args)
+        time.sleep(max(0.0, start - time.time()) + value)
+    store._write = slow_write
+    try:
+        save_recording(rec, dest)
+    except FileExistsError as err:
+        print("refused:", err)
+        sys.exit(3)
+""")
+
+
+def test_two_writers_to_one_new_path_one_wins_and_one_is_refused(tmp_path):
+    """Two concurrent ``save_recording(..., overwrite=False)`` to one new path: the first
+    to finish keeps its store, the later one raises instead of silently replacing it."""
+    script = tmp_path / "writer.py"
+    script.write_text(CONCURRENT)
+    dest = tmp_path / "shared.zarr"
+    start = time.time() + 8          # both have imported and started writing by then
+    procs = [subprocess.Popen([sys.executable, str(script), str(dest), str(v), str(start)],
+                              stdout=subprocess.PIPE, text=True) for v in (1.0, 3.0)]
+    codes = [p.wait(timeout=120) for p in procs]
+    assert codes == [0, 3], [p.stdout.read() for p in procs]
+    assert "appeared while the recording was being written" in procs[1].stdout.read()
+    assert float(open_recording(dest)["activity"][0, 0]) == 1.0
+    assert not list(tmp_path.glob(".shared.zarr*"))           # nothing half-written left

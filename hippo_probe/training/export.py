@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
-
 
 from ..pretrained import HERE
 from .checkpoint import load, save_atomic
+
+
+#: Names a shipped network may have: a plain file name, never a path or a hidden file.
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
 
 
 def _jsonable(obj):
@@ -27,6 +31,9 @@ def export_network(run_dir, name: str, dest=None) -> list:
     Works on a finished run (``network.pt``) or on a run in progress (its last
     checkpoint's best parameters); the log says which (``finished``, ``steps_done``).
     """
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise ValueError(f"`name` must be letters, digits, '_' or '-' (a file name inside "
+                         f"the destination, e.g. 'generalized_s1'); got {name!r}")
     run_dir = Path(run_dir)
     dest = Path(dest or HERE)
     dest.mkdir(parents=True, exist_ok=True)
@@ -37,7 +44,7 @@ def export_network(run_dir, name: str, dest=None) -> list:
     state = {k: v.detach().clone().contiguous() for k, v in state.items()}
     # plain dicts and tensors only: a shipped file must not depend on class names
     network = {"model": state, "model_config": _jsonable(ckpt["model_config"]),
-               "task": ckpt["task"],
+               "task": ckpt["task"], "world": ckpt["config"].get("world", "compass"),
                "config": ckpt["config"], "class_weight": log.get("class_weight"),
                "test": log.get("test"), "steps_done": ckpt["step"], "finished": finished,
                "base_network": log.get("base_network")}

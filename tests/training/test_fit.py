@@ -267,3 +267,12 @@ def test_a_shipped_name_not_trained_yet_is_a_clear_error():
         pytest.skip("the darkness world's generalized network is shipped")
     with pytest.raises(ValueError, match="'generalized' is not shipped in this version"):
         hp.load_pretrained("generalized")
+
+
+@pytest.mark.parametrize("name", ["../outside", "", ".hidden", "a/b", None])
+def test_export_refuses_a_name_that_is_not_a_plain_file_name(uninterrupted, tmp_path, name):
+    from hippo_probe.training import export_network
+    d, _ = uninterrupted
+    with pytest.raises(ValueError, match="`name` must be letters"):
+        export_network(d / "run", name, dest=tmp_path / "dest")
+    assert not (tmp_path / "outside.pt").exists() and not (tmp_path / "dest").exists()

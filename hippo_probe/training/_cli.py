@@ -83,6 +83,7 @@ def _train(a):
 
 def _evaluate(a):
     import json
+    import math
 
     from ..pretrained import load_pretrained
     from ..tasks import make_trials
@@ -90,6 +91,8 @@ def _evaluate(a):
 
     from ..tasks import task_config
 
+    if a.trials < 1:
+        raise ValueError(f"`--trials` must be >= 1; got {a.trials}")
     net = load_pretrained(a.checkpoint)
     task = a.task or net.task
     world = a.world or net.world
@@ -99,6 +102,11 @@ def _evaluate(a):
     start_relative = task_config(net.task).target == "start_relative"
     target = batch.position - batch.start[None] if start_relative else batch.position
     metrics = summarize(evaluate_network(net, batch, weight, target=target), batch.dt)
+    broken = sorted(k for k, v in metrics.items()
+                    if isinstance(v, float) and not math.isfinite(v))
+    if broken:
+        raise ValueError(f"the network {str(a.checkpoint)!r} gives non-finite results "
+                         f"({', '.join(broken)}): its parameters are broken")
     print(json.dumps({"network": str(a.checkpoint), "task": task, "world": world,
                       "network_world": net.world, "split": a.split,
                       "trials": a.trials, **metrics}, indent=1))

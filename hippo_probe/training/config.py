@@ -64,7 +64,11 @@ class TrainConfig:
         the CPU's AMX units (2-6x the float32 speed here) with cell state, gate math,
         losses, gradient accumulation and Adam's parameters in float32. Validation, test
         and the saved parameters are float32 either way. A checkpoint records it; a
-        resumed run must use the same.
+        resumed run must use the same. Default bf16: the same 1,000-step generalized run
+        (darkness world) ended at validation error 0.159 m in bf16 and 0.151 m in fp32
+        (5.4% apart; test 0.157 vs 0.152 m, 3.6%), while fp32 with another init seed
+        ended at 0.157 m (3.9% from fp32, 1.4% from bf16): the gap is that between seeds,
+        at 1.8x the speed (515 vs 924 s; ``analyses/precision_convergence.py``).
     """
 
     task: str = "generalized"
@@ -87,7 +91,7 @@ class TrainConfig:
     init_from: str | None = None
     train_only: str | None = None
     device: str = "cpu"
-    precision: str = "fp32"
+    precision: str = "bf16"
 
     #: fields that do not change the trained parameters (may differ on resume)
     RESUMABLE_CHANGES = ("threads", "checkpoint_minutes", "n_test")

@@ -34,6 +34,7 @@ import hashlib
 import os
 import shutil
 import tempfile
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
@@ -106,7 +107,7 @@ class TaskConfig:
         return hashlib.sha1(repr((self, ARENA_SEED, _FORMAT_VERSION)).encode()).hexdigest()[:10]
 
 
-_FORMAT_VERSION = 2  # 2: blocks hold `heading_drift`; names carry the world
+_FORMAT_VERSION = 3  # 2: blocks hold `heading_drift`, names the world; 3: sha1 digests
 
 #: Mean arena radius (m) of each task: 1 m for localization, 0.33 m for the generalized
 #: and specialized tasks (the study's Fig. 2-3).
@@ -520,15 +521,48 @@ _CACHED_FIELDS = ("inputs", "position", "head_direction", "heading_drift", "cont
 
 
 def _write_block(zarr, batch, tmp, path) -> None:
-    """Write a block's arrays to ``tmp``, then rename it to ``path`` (atomic)."""
+    """Write a block's arrays, with the sha1 of each, to ``tmp``, then rename it to
+    ``path`` (atomic)."""
     group = zarr.open_group(str(tmp), mode="w")
+    digests = {}
     for name in _CACHED_FIELDS:
-        value = getattr(batch, name)
+        value = np.ascontiguousarray(getattr(batch, name))
         group.create_array(name, data=value, chunks=value.shape)
+        digests[name] = _sha1(value)
+    group.attrs["sha1"] = digests
     try:
         os.rename(tmp, path)
     except OSError:  # another process won the race; its block is identical
         pass
+
+
+def _sha1(value: np.ndarray) -> str:
+    return hashlib.sha1(np.ascontiguousarray(value).tobytes()).hexdigest()
+
+
+def _read_block(zarr, path):
+    """The arrays of a cached block, or None if it is unreadable or any array differs from
+    the digest written with it (a flipped byte, a deleted chunk that zarr would read as
+    zeros, a block of an older format)."""
+    try:
+        group = zarr.open_group(str(path), mode="r")
+        digests = group.attrs.get("sha1") or {}
+        data = {name: group[name][...] for name in _CACHED_FIELDS}
+    except Exception:        # zarr and the codecs raise many types for a damaged store
+        return None
+    if any(digests.get(name) != _sha1(value) for name, value in data.items()):
+        return None
+    return data
+
+
+def _discard(path: Path) -> None:
+    """Remove a damaged block (renamed aside first, so no reader sees half of it)."""
+    aside = path.with_name(f".{path.name}.damaged-{os.getpid()}")
+    try:
+        os.rename(path, aside)
+    except OSError:
+        return                       # another process already replaced it
+    shutil.rmtree(aside, ignore_errors=True)
 
 
 def default_cache_dir() -> Path:
@@ -546,7 +580,9 @@ def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0,
     group per block, each written beside and renamed into place (atomic: concurrent
     processes and interrupted runs never see half a block). The store's name carries the
     world's name and a fingerprint of the task's whole configuration, so a change to the
-    world never reuses stale trials.
+    world never reuses stale trials. Each block carries the sha1 of its arrays, checked
+    on every read: a damaged block (a flipped byte, a lost chunk) is regenerated, with a
+    ``RuntimeWarning``, never trained on.
     """
     import zarr
 
@@ -563,7 +599,14 @@ def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0,
     stop = first + n_trials
     for block in range(first // CACHE_CHUNK, -(-stop // CACHE_CHUNK)):
         path = root / f"block{block:06d}.zarr"
-        if not path.exists():
+        present = path.exists()
+        whole = _read_block(zarr, path) if present else None
+        if whole is None:
+            if present:
+                warnings.warn(f"trial cache block {path} is damaged (its arrays do not "
+                              f"match their digests); regenerating it", RuntimeWarning,
+                              stacklevel=2)
+                _discard(path)
             batch = make_trials(task, CACHE_CHUNK, split, seed, first=block * CACHE_CHUNK,
                                 config=config)
             tmp = Path(tempfile.mkdtemp(dir=root, prefix=".tmp-"))
@@ -571,14 +614,11 @@ def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0,
                 _write_block(zarr, batch, tmp / "g", path)
             finally:
                 shutil.rmtree(tmp, ignore_errors=True)
-        group = zarr.open_group(str(path), mode="r")
+            whole = {name: getattr(batch, name) for name in _CACHED_FIELDS}
         lo = max(first, block * CACHE_CHUNK) - block * CACHE_CHUNK
         hi = min(stop, (block + 1) * CACHE_CHUNK) - block * CACHE_CHUNK
-        data = {}
-        for name in _CACHED_FIELDS:
-            arr = group[name]
-            data[name] = arr[:, lo:hi] if name in _TIME_MAJOR else arr[lo:hi]
-        blocks.append(data)
+        blocks.append({name: (value[:, lo:hi] if name in _TIME_MAJOR else value[lo:hi])
+                       for name, value in whole.items()})
     data = {name: (np.concatenate([b[name] for b in blocks],
                                   axis=1 if name in _TIME_MAJOR else 0)
                    if blocks else None) for name in _CACHED_FIELDS}

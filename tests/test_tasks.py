@@ -293,3 +293,26 @@ def test_cached_trials_bad_seed_writes_nothing(tmp_path):
     with pytest.raises(ValueError, match=r"`seed`.*-1"):
         cached_trials("generalized", 4, seed=-1, cache_dir=tmp_path)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("damage", ["flip", "delete"])
+def test_a_damaged_cache_block_is_regenerated_never_read(damage, tmp_path, small_blocks):
+    """Flipped bytes in a chunk, or a deleted chunk (which zarr would read as zeros): the
+    block's digests disagree, it is regenerated with a warning, and the trials returned
+    are the true ones."""
+    made = make_trials("generalized", 4, "train", 0)
+    cached_trials("generalized", 4, "train", 0, cache_dir=tmp_path)
+    name = "inputs" if damage == "flip" else "position"
+    (chunk,) = [p for p in tmp_path.glob(f"*/block000000.zarr/{name}/c/**/*") if p.is_file()]
+    if damage == "flip":
+        raw = bytearray(chunk.read_bytes())
+        for k in range(4):
+            raw[len(raw) // 2 + 7 * k] ^= 0xFF
+        chunk.write_bytes(bytes(raw))
+    else:
+        chunk.unlink()
+    with pytest.warns(RuntimeWarning, match="damaged"):
+        got = cached_trials("generalized", 4, "train", 0, cache_dir=tmp_path)
+    assert_same_batch(got, made)
+    # ... and the regenerated block is whole again
+    assert_same_batch(cached_trials("generalized", 4, "train", 0, cache_dir=tmp_path), made)

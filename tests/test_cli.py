@@ -70,9 +70,9 @@ def test_generalized_pi_error_after_200_s_is_of_the_order_of_the_arena_radius(wo
 def test_world_stats_of_the_compass_world_have_no_drift(capsys):
     assert main(["world-stats", "--world", "compass", "--trials", "10"]) == 0
     printed = capsys.readouterr().out
-    assert "Cheung et al. 2012" in printed and "5.1-26.6 deg/min" in printed
-    rows = [line.split() for line in printed.splitlines() if line.startswith("generalized")]
-    assert float(rows[1][1]) == 0.0
+    assert "heading drift" not in printed          # the compass world's table, as it was
+    rows = [line for line in printed.splitlines() if line.startswith("generalized")]
+    assert len(rows) == 1
 
 
 @pytest.mark.parametrize("argv, words", [

@@ -116,7 +116,9 @@ def target_prior(task: str, *, seed: int = 0, config: TaskConfig | None = None,
     """
     from ..tasks import task_config
 
-    config = config or task_config(task)
+    config = config or task_config(task)      # the darkness world unless given
+    if config.name != task:
+        raise ValueError(f"`config` is for task {config.name!r}; got task={task!r}")
     return _target_prior(task, int(seed), config, naive_bayes or NaiveBayesConfig())
 
 
@@ -163,6 +165,7 @@ def naive_bayes(batch, *, start: str | None = None, prior: TargetPrior | None = 
         Default: :func:`target_prior` of the batch's task and seed, from
         ``NaiveBayesConfig.prior_trials`` training trials.
     config : TaskConfig, optional
+        Must be the batch's own (``batch.config``, the default) if given.
     baseline : BaselineConfig, optional
 
     Returns

@@ -28,7 +28,7 @@ def path_integration(batch, *, start: str | None = None, config: TaskConfig | No
     start : {"known", "unknown"}, optional
         Default: unknown for the localization task, known otherwise.
     config : TaskConfig, optional
-        The task's configuration if the batch was made with a modified one.
+        Must be the batch's own (``batch.config``, the default) if given.
     baseline : BaselineConfig, optional
 
     Returns

@@ -57,6 +57,7 @@ def pf_slam(batch, n_particles: int | None = None, *, keep=(), threads: int | No
     threads : int, optional
         Trials run in parallel on this many threads (default: all cores).
     config : TaskConfig, optional
+        Must be the batch's own (``batch.config``, the default) if given.
     baseline : BaselineConfig, optional
 
     Returns

@@ -84,6 +84,7 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
     progress : bool
         Show a progress bar over chunks.
     config : TaskConfig, optional
+        Must be the batch's own (``batch.config``, the default) if given.
     baseline : BaselineConfig, optional
 
     Returns
@@ -187,6 +188,7 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
         "schema": "hippo_probe.baselines/1", "task": batch.task, "split": batch.split,
         "seed": int(batch.seed), "dt": float(batch.dt), "frame": "arena",
         "world": config.world.name, "heading_drift": float(config.world.noise.heading_drift),
+        "config_fingerprint": config.fingerprint(),
         "n_particles": int(n_particles), "slam_particles": int(slam_particles) if slam else 0,
         "created_by": f"hippo_probe {__version__}", **attrs})
 

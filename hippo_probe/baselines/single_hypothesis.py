@@ -31,7 +31,9 @@ def single_hypothesis(batch, *, start: str | None = None, config: TaskConfig | N
     3. :math:`\hat x` jumps to the nearest of these points.
 
     No uncertainty is carried: a reset onto the wrong wall is believed until the next
-    contact.
+    contact. In the darkness world :math:`h` is the sensed, drifting heading (the
+    hypothesis does not estimate the drift), so its resets go wrong more and more often as
+    the drift grows.
 
     Parameters
     ----------
@@ -39,6 +41,7 @@ def single_hypothesis(batch, *, start: str | None = None, config: TaskConfig | N
     start : {"known", "unknown"}, optional
         Default: unknown (start prior's mean) for localization, known otherwise.
     config : TaskConfig, optional
+        Must be the batch's own (``batch.config``, the default) if given.
     baseline : BaselineConfig, optional
 
     Returns

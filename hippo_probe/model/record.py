@@ -39,6 +39,11 @@ def baselines_from_dataset(ds, batch) -> dict:
         raise ValueError(f"`baselines` file was made in the {world!r} world; the batch is "
                          f"of the {batch.world.name!r} world: rerun `hippo-probe baselines "
                          f"--world {batch.world.name}`")
+    made = ds.attrs.get("config_fingerprint")
+    if made is not None and made != batch.config.fingerprint():
+        raise ValueError("`baselines` file was made with another task or world configuration "
+                         "than the batch's (its config_fingerprint differs): rerun "
+                         "`hippo-probe baselines` on these trials")
     ds = ds.sel(trial_id=batch.trial_index)
     position = np.moveaxis(ds["position"].values, 0, 1)
     if position.shape != batch.position.shape or not np.allclose(position, batch.position,

@@ -11,6 +11,7 @@ from .sensors import heading_drift, sense, wrap_angle
 __all__ = [
     "Arena", "ArenaConfig", "FEATURES", "MotionConfig", "NoiseModel", "SensorConfig",
     "WORLDS", "WorldConfig", "contains", "heading_drift", "inward_normals", "polygon_area",
-    "random_arena", "random_vertices", "regular_polygon", "sample_uniform", "sense", "simulate_motion",
+    "random_arena", "random_vertices", "regular_polygon", "sample_uniform", "sense",
+    "simulate_motion",
     "wall_distance", "world_config", "wrap_angle",
 ]

@@ -146,6 +146,9 @@ class SensorConfig:
                      high=self.touch_range, high_inclusive=False)
 
 
+#: Heading drift of the darkness world (rad/sqrt(s)); see :attr:`NoiseModel.heading_drift`.
+DARKNESS_HEADING_DRIFT = 0.05
+
 @dataclass(frozen=True)
 class NoiseModel:
     r"""Noise on every sensed quantity, per network step.
@@ -202,16 +205,19 @@ class NoiseModel:
         0.005 m and 0.2 rad.
     heading_drift : float
         S.d. of the heading drift's Wiener increments, rad/sqrt(s): after ``t`` seconds
-        ``eta ~ N(0, heading_drift^2 t)``. 0 in the compass world. The darkness world's
-        0.05 rad/sqrt(s) is calibrated to Cheung et al. (2012), who compare their drift
-        model with head-direction cells recorded without vision drifting 5.1-26.6 deg/min
+        ``eta ~ N(0, heading_drift^2 t)``. 0 in the compass world. The default, the
+        darkness world's 0.05 rad/sqrt(s), is calibrated to Cheung et al. (2012), who
+        compare their drift model with head-direction cells recorded without vision drifting 5.1-26.6 deg/min
         (19 cells): the absolute drift over a 1-minute window is half-normal with s.d.
         ``0.05 * sqrt(60)`` = 0.39 rad, so its median is ``0.674 * 0.39`` rad = 14.9
         deg/min, the middle of that range. One drift s.d. serves every trial, so the rates
         spread wider than the 19 cells' (whose own drift rates differ): 18% of 1-minute
         windows drift less than 5.1 and 23% more than 26.6 deg/min (half-normal CDF;
         ``hippo-probe world-stats`` prints the simulated distribution). With it, path
-        integration alone loses the place within 2-3 minutes, their point.
+        integration alone loses the place within 2-3 minutes, their point. A Wiener
+        process has no single "rate": its mean rate over a window of ``w`` seconds falls
+        as ``1 / sqrt(w)``; the 1-minute window is this project's reading of "deg/min"
+        (the cells' rates were measured over recordings of minutes).
     """
 
     speed_sd: float = 0.18
@@ -220,7 +226,7 @@ class NoiseModel:
     turn_sd: float = 0.05
     contact_distance_sd: float = 0.005
     contact_angle_sd: float = 0.2
-    heading_drift: float = 0.0
+    heading_drift: float = DARKNESS_HEADING_DRIFT
 
     def __post_init__(self):
         for name in ("speed_sd", "rotation_sd", "head_direction_sd", "turn_sd",
@@ -233,9 +239,6 @@ class NoiseModel:
         integration)."""
         return cls(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
-
-#: Heading drift of the darkness world (rad/sqrt(s)); see :attr:`NoiseModel.heading_drift`.
-DARKNESS_HEADING_DRIFT = 0.05
 
 #: The named worlds: ``"darkness"`` (the study's, the default) and ``"compass"`` (the first
 #: world of this project, kept for the ablation).
@@ -254,22 +257,24 @@ class WorldConfig:
     ----------
     name : {"darkness", "compass"}
         The world this configuration belongs to (recorded in trial caches, recordings and
-        checkpoints). A compass world has no drift; a darkness world may have its drift
-        switched off (``heading_drift=0``) for ablations and tests.
+        checkpoints). A compass world has no drift (build it with
+        ``world_config("compass")``; ``WorldConfig(name="compass")`` with the default,
+        drifting noise model is refused); a darkness world may have its drift switched
+        off (``heading_drift=0``) for ablations and tests.
     """
 
     arena: ArenaConfig = field(default_factory=ArenaConfig)
     motion: MotionConfig = field(default_factory=MotionConfig)
     sensors: SensorConfig = field(default_factory=SensorConfig)
-    noise: NoiseModel = field(
-        default_factory=lambda: NoiseModel(heading_drift=DARKNESS_HEADING_DRIFT))
+    noise: NoiseModel = field(default_factory=NoiseModel)
     name: str = "darkness"
 
     def __post_init__(self):
         check_option("name", self.name, WORLDS)
         if self.name == "compass" and self.noise.heading_drift != 0:
             raise ValueError(f"the compass world has no heading drift: `heading_drift` must "
-                             f"be 0 for name='compass'; got {self.noise.heading_drift}")
+                             f"be 0 for name='compass'; got {self.noise.heading_drift} "
+                             f"(build it with world_config('compass'))")
 
 
 def world_config(world="darkness", *, arena: ArenaConfig | None = None) -> WorldConfig:
@@ -302,8 +307,8 @@ def world_config(world="darkness", *, arena: ArenaConfig | None = None) -> World
 
 # Network input features, in column order of ``TrialBatch.inputs``.
 FEATURES = (
-    "dx",            # noisy displacement over the step, in the sensed heading frame, x (m)
-    "dy",            # noisy displacement over the step, in the sensed heading frame, y (m)
+    "dx",            # noisy displacement over the step, x (m), allocentric axes turned by
+    "dy",            # ... the heading drift eta (the rat's own frame); y (m)
     "cos_hd",        # cos of sensed (noisy, drifting) head direction at the end of the step
     "sin_hd",        # sin of sensed head direction
     "dhd",           # sensed change of head direction over the step (rad)

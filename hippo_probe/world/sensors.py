@@ -21,7 +21,8 @@ def wrap_angle(a):
     return np.where(r >= np.pi, r - 2 * np.pi, r)
 
 
-def heading_drift(noise: NoiseModel, drift_draws: np.ndarray, dt: float) -> np.ndarray:
+def heading_drift(noise: NoiseModel, drift_draws: np.ndarray | None,
+                  dt: float) -> np.ndarray | None:
     r"""The heading drift :math:`\eta_t` (B, T) of trials, rad: a Wiener process from 0,
     :math:`\eta_t = \sigma_\eta \sqrt{dt} \sum_{u \le t} z_u`
     (:attr:`~hippo_probe.world.config.NoiseModel.heading_drift`).
@@ -29,7 +30,8 @@ def heading_drift(noise: NoiseModel, drift_draws: np.ndarray, dt: float) -> np.n
     Parameters
     ----------
     noise : NoiseModel
-    drift_draws : (B, T) standard normal draws, or None for no drift (zeros).
+    drift_draws : (B, T) standard normal draws, or None for no drift (then None is
+        returned: the compass world draws none).
     dt : float
         Network step (s).
     """

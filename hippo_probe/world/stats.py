@@ -87,6 +87,8 @@ def format_stats(stats: dict) -> str:
     rows = [head, "-" * len(head)]
     for task, s in stats.items():
         rows.append(f"{task:<14}" + "".join(f"{s.get(k, float('nan')):>20.3f}" for _, k in cols))
+    if all(s["drift_rate_median_deg_per_min"] == 0 for s in stats.values()):
+        return "\n".join(rows)        # the compass world: no drift, the table as it was
     lo, hi = CHEUNG_DRIFT_RANGE_DEG_PER_MIN
     rows += ["", f"heading drift over {DRIFT_WINDOW_S:.0f} s windows, deg/min (Cheung et al. "
              f"2012: head-direction cells in darkness, {lo}-{hi} deg/min over 19 cells)",

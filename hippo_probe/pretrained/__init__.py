@@ -25,6 +25,12 @@ NAMES = ("localization", "generalized", "specialized", "generalized_readout",
 LEGACY_WORLD = "compass"
 
 
+def checkpoint_world(obj: dict) -> str:
+    """The world a loaded network or checkpoint was trained in (:data:`LEGACY_WORLD` for
+    files that do not say)."""
+    return obj.get("world") or (obj.get("config") or {}).get("world") or LEGACY_WORLD
+
+
 def available() -> list:
     """Names of the shipped networks present in this installation."""
     return sorted(p.stem for p in HERE.glob("*.pt"))
@@ -77,7 +83,7 @@ def load_pretrained(name: str):
     net = Navigator(dataclasses.replace(config, precision="fp32"))
     net.load_state_dict(obj.get("best_model") or obj["model"])
     net.task = obj.get("task")
-    net.world = obj.get("world") or (obj.get("config") or {}).get("world") or LEGACY_WORLD
+    net.world = checkpoint_world(obj)
     net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test",
                                         "steps_done", "finished", "base_network")}
     net.info["world"] = net.world

@@ -55,10 +55,10 @@ def build_network(config: TrainConfig) -> Navigator:
     net = Navigator(model_config)
     net.base_network = None
     if config.init_from:
-        from ..pretrained import resolve_network_file
+        from ..pretrained import checkpoint_world, resolve_network_file
         path = resolve_network_file(config.init_from)
         obj = load(path)
-        base_world = obj.get("world") or (obj.get("config") or {}).get("world") or "compass"
+        base_world = checkpoint_world(obj)
         if base_world != config.world:
             raise ValueError(f"`init_from` {config.init_from!r} was trained in the "
                              f"{base_world!r} world; this run is of the {config.world!r} "

@@ -33,7 +33,6 @@ import functools
 import hashlib
 import os
 import shutil
-import tempfile
 import warnings
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, fields, replace
@@ -41,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._atomic import atomic_path
 from ._validators import check_nonnegative_int, check_option
 from .world.arena import fan_points, fan_weights, random_vertices, wall_distance
 from .world.config import FEATURES, ArenaConfig, WorldConfig, world_config
@@ -520,19 +520,18 @@ _CACHED_FIELDS = ("inputs", "position", "head_direction", "heading_drift", "cont
                   "start", "environment", "arena_vertices", "trial_index")
 
 
-def _write_block(zarr, batch, tmp, path) -> None:
-    """Write a block's arrays, with the sha1 of each, to ``tmp``, then rename it to
-    ``path`` (atomic)."""
-    group = zarr.open_group(str(tmp), mode="w")
-    digests = {}
-    for name in _CACHED_FIELDS:
-        value = np.ascontiguousarray(getattr(batch, name))
-        group.create_array(name, data=value, chunks=value.shape)
-        digests[name] = _sha1(value)
-    group.attrs["sha1"] = digests
+def _write_block(zarr, batch, path) -> None:
+    """Write a block's arrays, with the sha1 of each, to ``path`` (atomically)."""
     try:
-        os.rename(tmp, path)
-    except OSError:  # another process won the race; its block is identical
+        with atomic_path(path, what="trial cache block") as tmp:
+            group = zarr.open_group(str(tmp), mode="w")
+            digests = {}
+            for name in _CACHED_FIELDS:
+                value = np.ascontiguousarray(getattr(batch, name))
+                group.create_array(name, data=value, chunks=value.shape)
+                digests[name] = _sha1(value)
+            group.attrs["sha1"] = digests
+    except FileExistsError:   # another process wrote it meanwhile; its block is identical
         pass
 
 
@@ -609,11 +608,7 @@ def cached_trials(task: str, n_trials: int, split: str = "train", seed: int = 0,
                 _discard(path)
             batch = make_trials(task, CACHE_CHUNK, split, seed, first=block * CACHE_CHUNK,
                                 config=config)
-            tmp = Path(tempfile.mkdtemp(dir=root, prefix=".tmp-"))
-            try:
-                _write_block(zarr, batch, tmp / "g", path)
-            finally:
-                shutil.rmtree(tmp, ignore_errors=True)
+            _write_block(zarr, batch, path)
             whole = {name: getattr(batch, name) for name in _CACHED_FIELDS}
         lo = max(first, block * CACHE_CHUNK) - block * CACHE_CHUNK
         hi = min(stop, (block + 1) * CACHE_CHUNK) - block * CACHE_CHUNK

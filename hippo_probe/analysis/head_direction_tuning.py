@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._angles import wrap_angle
 from .._validators import check_number
 from . import _common
 from .config import HEAD_DIRECTION
@@ -17,7 +18,7 @@ def direction_bins(hd, n_bins):
     hd = np.asarray(hd, float)
     finite = np.isfinite(hd)
     bins = np.full(hd.shape, -1, np.int64)
-    k = np.floor((np.mod(hd[finite] + np.pi, 2 * np.pi)) / (2 * np.pi) * n_bins)
+    k = np.floor((wrap_angle(hd[finite]) + np.pi) / (2 * np.pi) * n_bins)
     bins[finite] = np.minimum(k.astype(np.int64), n_bins - 1)
     return bins
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._angles import wrap_angle
 from .._validators import check_shape
 from . import _common
 
@@ -49,7 +50,7 @@ def position_errors(estimate, position, centre=(0.0, 0.0)):
     euclid = np.linalg.norm(est - pos, axis=1)
     radial = np.abs(np.linalg.norm(est, axis=1) - np.linalg.norm(pos, axis=1))
     diff = np.arctan2(est[:, 1], est[:, 0]) - np.arctan2(pos[:, 1], pos[:, 0])
-    angular = np.abs(np.mod(diff + np.pi, 2 * np.pi) - np.pi)
+    angular = np.abs(wrap_angle(diff))
     return euclid, radial, angular
 
 

@@ -75,7 +75,7 @@ import numpy as np
 
 from ..world.arena import edges, inward_normals
 from ..world.config import MotionConfig, WorldConfig
-from ..world.sensors import wrap_angle
+from .._angles import wrap_angle, wrap_angle_scalar
 from .config import ContactModelConfig
 
 #: Columns of a wall table (:func:`wall_table`), one row per wall.
@@ -258,11 +258,6 @@ _SQRT2PI = math.sqrt(2.0 * math.pi)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _wrap(a):
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
 def _normal_cdf(u):
     return 0.5 * math.erfc(-u / _SQRT2)
 
@@ -288,7 +283,7 @@ def wall_terms(normal_angle, heading, angle, path_length, angle_obs_var, angle_w
     hypothesis, so the particle filters call this per particle."""
     total_var = angle_obs_var + angle_wall_var
     angle_sd = math.sqrt(total_var)
-    error = _wrap(angle - (normal_angle + math.pi - heading))
+    error = wrap_angle_scalar(angle - (normal_angle + math.pi - heading))
     z = error / angle_sd
     if abs(z) > cutoff:
         return 0.0, 0.0, 1.0
@@ -305,7 +300,7 @@ def wall_terms(normal_angle, heading, angle, path_length, angle_obs_var, angle_w
 def towards(normal_angle, heading, heading_sd):
     """Probability that the true heading points into a wall (``cos(theta - phi_k) < 0``)
     given a heading estimate ``heading`` with normal noise ``heading_sd``."""
-    alpha = abs(_wrap(heading - normal_angle))
+    alpha = abs(wrap_angle_scalar(heading - normal_angle))
     if heading_sd == 0.0:                          # a noiseless heading: a step function
         return 1.0 if alpha > 0.5 * math.pi else 0.0
     return _normal_cdf((alpha - 0.5 * math.pi) / heading_sd)

@@ -44,13 +44,11 @@ package version and each method's provenance (``attrs_<method>``, a JSON string)
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import uuid
 from pathlib import Path
 
 import numpy as np
 
+from .._atomic import atomic_path
 from .._validators import check_positive
 from .._version import __version__
 from ..tasks import TaskConfig
@@ -265,19 +263,8 @@ def save_baselines(ds, path, *, overwrite: bool = False) -> Path:
     if path.exists() and not overwrite:
         raise FileExistsError(f"`path` {str(path)!r} exists; pass overwrite=True "
                               f"(--overwrite) to replace it")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.partial-{os.getpid()}-{uuid.uuid4().hex[:8]}")
-    try:
+    with atomic_path(path, overwrite=overwrite, what="path") as tmp:
         ds.to_zarr(tmp, mode="w", consolidated=False)
-        if path.exists():
-            old = path.with_name(f".{path.name}.old-{uuid.uuid4().hex[:8]}")
-            os.rename(path, old)
-            os.rename(tmp, path)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.rename(tmp, path)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
     return path
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._angles import wrap_angle
 from .._validators import check_finite, check_option, check_shape
 from ..errors import RecordingError
 from .layout import assemble, trial_blocks
@@ -12,11 +13,6 @@ from .validate import _v, validate
 
 #: Metres per unit of the position units ``from_arrays`` accepts.
 LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
-
-
-def wrap_angle(angle):
-    """Wrap radians into [-pi, pi)."""
-    return np.mod(np.asarray(angle, dtype=float) + np.pi, 2 * np.pi) - np.pi
 
 
 def check_time(time, name="time"):

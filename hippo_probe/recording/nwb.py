@@ -10,16 +10,17 @@ from __future__ import annotations
 
 import datetime
 import json
-import os
 import uuid
 import warnings
 from pathlib import Path
 
 import numpy as np
 
+from .._atomic import atomic_path
 from .._validators import check_option
 from ..errors import RecordingError
-from .arrays import LENGTH_UNITS, bin_spikes, check_time, wrap_angle
+from .._angles import wrap_angle
+from .arrays import LENGTH_UNITS, bin_spikes, check_time
 from .config import DEFAULTS
 from .layout import assemble, trial_blocks
 from .schema import annotate
@@ -644,14 +645,9 @@ def to_nwb(rec, path, overwrite=False):
                                         description=var.attrs["long_name"]))
         else:
             nwb.add_scratch(np.asarray(data), name=name, description=meta)
-    tmp = path.parent / f".partial-{os.getpid()}-{uuid.uuid4().hex[:8]}-{path.name}"
-    try:
+    with atomic_path(path, overwrite=overwrite, what="path") as tmp:
         with pynwb.NWBHDF5IO(str(tmp), "w") as io:
             io.write(nwb)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
 
 
 def _plain(mapping):

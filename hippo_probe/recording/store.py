@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import os
-import shutil
-import uuid
 import warnings
 from pathlib import Path
 
@@ -13,13 +11,12 @@ import xarray as xr
 import zarr
 from zarr.codecs import BloscCodec, Crc32cCodec
 
+from .._atomic import OLD, atomic_path, remove_stale
 from ..errors import RecordingError
 from .config import COMPLETE_MARKER, DEFAULTS
 from .layout import is_trial_aligned, trial_aligned_chunks, trial_blocks
-from .validate import validate
+from .validate import check_block, validate
 
-_PARTIAL = ".partial-"   # temp store beside the destination: .NAME.partial-PID-UUID
-_OLD = ".old-"           # previous store set aside during an overwrite: .NAME.old-UUID
 # xarray's decoders must leave the data as stored (times in seconds are not datetimes)
 _OPEN_KW = dict(consolidated=False, decode_times=False, decode_timedelta=False)
 
@@ -92,9 +89,22 @@ def _prepare(rec, time_chunk):
         rec = rec.assign({k: v for k, v in text.items() if k in rec.data_vars})
     rec = rec.assign_coords({name: coord.variable.compute()
                              for name, coord in rec.coords.items() if coord.chunks is not None})
-    return rec.assign({name: var.chunk({dim: time_chunk if dim == "time" else -1
-                                        for dim in var.dims})
+    return rec.assign({name: _checked(name, var.chunk({dim: time_chunk if dim == "time"
+                                                       else -1 for dim in var.dims}))
                        for name, var in rec.data_vars.items() if var.chunks is not None})
+
+
+def _checked(name, var):
+    """``var`` (dask-backed) with each block checked against the schema as it is computed
+    for writing, so lazily made NaNs fail the save (and nothing is left on disk) instead
+    of reaching the store unchecked."""
+    import dask.array as da
+
+    def check(block, block_info=None):
+        origin = [lo for lo, _ in block_info[0]["array-location"]] if block_info else None
+        return check_block(name, block, origin)
+
+    return var.copy(data=da.map_blocks(check, var.data, dtype=var.dtype))
 
 
 def _write(rec, store, config, storage_options=None):
@@ -109,27 +119,6 @@ def _write(rec, store, config, storage_options=None):
     group = zarr.open_group(store, mode="r+", storage_options=storage_options)
     nchunks = {name: int(array.nchunks) for name, array in group.arrays()}
     group.attrs[COMPLETE_MARKER] = {"complete": True, "nchunks": nchunks}
-
-
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
-def _remove_stale(dest: Path):
-    """Remove temp stores of earlier saves to ``dest`` whose writer has died."""
-    for item in dest.parent.glob(f".{dest.name}{_PARTIAL}*"):
-        pid = item.name[len(f".{dest.name}{_PARTIAL}"):].split("-")[0]
-        if pid.isdigit() and not _pid_alive(int(pid)):
-            shutil.rmtree(item, ignore_errors=True)
-    if dest.exists():    # an overwrite died after the swap; the old copy is garbage
-        for item in dest.parent.glob(f".{dest.name}{_OLD}*"):
-            shutil.rmtree(item, ignore_errors=True)
 
 
 def save_recording(rec, path, overwrite=False, *, config=DEFAULTS, storage_options=None):
@@ -190,32 +179,8 @@ def save_recording(rec, path, overwrite=False, *, config=DEFAULTS, storage_optio
         if not (dest / "zarr.json").is_file():
             raise FileExistsError(f"`path` exists and is not a zarr store: {dest}; refusing "
                                   "to replace it")
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    _remove_stale(dest)
-    tmp = dest.parent / f".{dest.name}{_PARTIAL}{os.getpid()}-{uuid.uuid4().hex[:8]}"
-    try:
+    with atomic_path(dest, overwrite=overwrite, what="path") as tmp:
         _write(rec, str(tmp), config)
-        if dest.exists() and overwrite:
-            old = dest.parent / f".{dest.name}{_OLD}{uuid.uuid4().hex[:8]}"
-            os.rename(dest, old)
-            os.rename(tmp, dest)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            # another writer may have finished at `dest` while this one wrote: without
-            # `overwrite` its store is kept and this write refused (a rename onto a
-            # non-empty directory fails, so the check-then-rename race cannot replace it)
-            try:
-                if dest.exists() or dest.is_symlink():
-                    raise FileExistsError
-                os.rename(tmp, dest)
-            except OSError:
-                raise FileExistsError(f"`path` appeared while the recording was being "
-                                      f"written (another writer?): {dest}; it was kept. "
-                                      f"Pass overwrite=True to replace it") from None
-        _remove_stale(dest)          # e.g. a copy set aside by an overwrite that died
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _save_url(rec, url, overwrite, config, storage_options):
@@ -267,6 +232,10 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     :class:`~hippo_probe.errors.RecordingError`; a corrupted chunk raises when read (its
     CRC32C checksum fails).
 
+    A lazy recording reads its store when computed: if the store at ``path`` is replaced
+    afterwards (``save_recording(..., overwrite=True)``), the old handle reads the new
+    store's chunks. Re-open after an overwrite, or ``.load()`` what must stay fixed.
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -289,10 +258,14 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     >>> rec = open_recording("recordings/A2929-200711.zarr")       # doctest: +SKIP
     >>> rec.activity.groupby("trial").mean().compute()              # doctest: +SKIP
     """
+    if not (chunks == "trials" or chunks is None or isinstance(chunks, (dict, int))):
+        raise ValueError(f"`chunks` must be 'trials', a dict of chunk sizes per dimension, "
+                         f"an int or None; got {chunks!r}")
     if not _is_url(path):
         local = _local(path)
+        remove_stale(local.parent)       # temporaries of saves here that died
         if not local.exists():
-            aside = sorted(local.parent.glob(f".{local.name}{_OLD}*"))
+            aside = sorted(local.parent.glob(f".{local.name}{OLD}*"))
             hint = (f"; an interrupted overwrite left the previous version at {aside[0]}"
                     if aside else "")
             raise FileNotFoundError(f"`path` does not exist: {local}{hint}")

@@ -235,26 +235,47 @@ def _check_environments(rec):
 
 
 def _check_values(rec, check_data):
-    for name, allow_nan in _FINITE_CHECKS.items():
+    for name in _FINITE_CHECKS:
         if name not in rec.data_vars:
             continue
         var = rec[name]
         if check_data is False or (check_data is None and var.chunks is not None):
             continue
-        values = np.asarray(var.values)
-        bad = np.isinf(values) if allow_nan else ~np.isfinite(values)
-        if bad.any():
-            idx = tuple(int(i) for i in np.argwhere(bad)[0])
-            what = "inf" if allow_nan else "NaN or inf"
-            _fail(name, f"must not contain {what}; found {_v(values[idx])} at index {idx}")
-        if name == "head_direction":
-            out = (values < -np.pi) | (values >= np.pi)
-            if out.any():
-                i = _first_bad(out)
-                _fail(name, f"must be in radians in [-pi, pi); got {_v(values[i])} at index {i}")
-        if name.startswith("class_probability"):
-            out = (values < 0) | (values > 1)
-            if out.any():
-                idx = tuple(int(i) for i in np.argwhere(out)[0])
-                _fail(name, f"must be in [0, 1]; got {_v(values[idx])} at index {idx}")
+        check_block(name, np.asarray(var.values))
 
+
+def check_block(name, values, origin=None):
+    """Check the values of (a block of) the data variable ``name`` against the schema.
+
+    ``origin`` is the block's first index in the whole variable, so that the error names
+    the index in the recording (used when a lazy recording is checked block by block as
+    it is written). Returns ``values`` unchanged.
+    """
+    allow_nan = _FINITE_CHECKS.get(name)
+    if allow_nan is None:
+        return values
+    origin = tuple(origin) if origin is not None else (0,) * values.ndim
+
+    def where(mask):
+        return tuple(int(i) + o for i, o in zip(np.argwhere(mask)[0], origin))
+
+    def value_at(idx):
+        return _v(values[tuple(i - o for i, o in zip(idx, origin))])
+
+    bad = np.isinf(values) if allow_nan else ~np.isfinite(values)
+    if bad.any():
+        idx = where(bad)
+        what = "inf" if allow_nan else "NaN or inf"
+        _fail(name, f"must not contain {what}; found {value_at(idx)} at index {idx}")
+    if name == "head_direction":
+        out = (values < -np.pi) | (values >= np.pi)
+        if out.any():
+            idx = where(out)
+            _fail(name, f"must be in radians in [-pi, pi); got {value_at(idx)} at index "
+                        f"{idx[0] if len(idx) == 1 else idx}")
+    if name.startswith("class_probability"):
+        out = (values < 0) | (values > 1)
+        if out.any():
+            idx = where(out)
+            _fail(name, f"must be in [0, 1]; got {value_at(idx)} at index {idx}")
+    return values

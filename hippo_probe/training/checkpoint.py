@@ -5,27 +5,60 @@ Python values only, plus the allow-list :data:`SAFE_GLOBALS` (the project's own
 architecture dataclass and torch's version string, which files written before the
 allow-list hold). A file that names any other global (a crafted pickle would name e.g.
 ``os.system``) is refused before anything in it runs.
+
+Every file carries :data:`DIGEST_KEY`, the sha256 of its content (each tensor's dtype,
+shape and bytes, every plain value's repr, in key order), checked on load: a flipped
+byte in a tensor is refused rather than resumed from. Files written before the digest
+existed have none and load unchecked.
 """
 
 from __future__ import annotations
 
-import os
+import hashlib
 import pickle
 from pathlib import Path
 
 import torch
 
+from .._atomic import atomic_path
 from ..errors import CheckpointError
 
 
-def save_atomic(obj, path) -> None:
-    """``torch.save`` to ``path`` so that a crash leaves the previous file or the new one."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    torch.save(obj, tmp)
-    with open(tmp, "rb") as f:
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+DIGEST_KEY = "content_sha256"
+
+
+def content_digest(obj) -> str:
+    """sha256 of a checkpoint's content: tensors by dtype, shape and bytes, plain values
+    by repr, dicts in key order (so it does not depend on how the file was zipped)."""
+    h = hashlib.sha256()
+
+    def visit(value):
+        if isinstance(value, torch.Tensor):
+            t = value.detach().cpu().contiguous()
+            h.update(f"T{t.dtype}{tuple(t.shape)}".encode())
+            h.update(t.view(torch.uint8).numpy().tobytes() if t.numel() else b"")
+        elif isinstance(value, dict):
+            h.update(b"D%d" % len(value))
+            for key in sorted(value, key=repr):
+                h.update(repr(key).encode())
+                visit(value[key])
+        elif isinstance(value, (list, tuple)):
+            h.update(b"L%d" % len(value))
+            for item in value:
+                visit(item)
+        else:
+            h.update(f"V{type(value).__name__}:{value!r}".encode())
+
+    visit({k: v for k, v in obj.items() if k != DIGEST_KEY})
+    return h.hexdigest()
+
+
+def save_atomic(obj: dict, path) -> None:
+    """``torch.save`` ``obj`` with its :func:`content_digest` to ``path``, atomically (a
+    crash leaves the previous file or the new one)."""
+    obj = {**obj, DIGEST_KEY: content_digest(obj)}
+    with atomic_path(path, overwrite=True, what="checkpoint") as tmp:
+        torch.save(obj, tmp)
 
 
 def load(path) -> dict:
@@ -50,6 +83,11 @@ def load(path) -> dict:
     if not isinstance(obj, dict) or "model" not in obj or "model_config" not in obj:
         raise CheckpointError(f"`checkpoint` {str(path)!r} has no network in it "
                               f"(expected keys 'model' and 'model_config')")
+    stored = obj.pop(DIGEST_KEY, None)
+    if stored is not None and stored != content_digest(obj):
+        raise CheckpointError(f"`checkpoint` {str(path)!r} is corrupt: its content does "
+                              f"not match the sha256 written with it (a damaged copy?); "
+                              f"use an intact copy or an earlier checkpoint")
     return obj
 
 

@@ -6,6 +6,7 @@ import json
 import re
 from pathlib import Path
 
+from .._atomic import write_text
 from ..pretrained import HERE
 from .checkpoint import load, save_atomic
 
@@ -56,7 +57,5 @@ def export_network(run_dir, name: str, dest=None) -> list:
         program, *rest = log["command"].split(" ")
         log["command"] = " ".join([Path(program).name, *rest])
     js = dest / f"{name}.log.json"
-    tmp = js.with_suffix(".tmp")
-    tmp.write_text(json.dumps(_jsonable(log), indent=0))
-    tmp.replace(js)
+    write_text(js, json.dumps(_jsonable(log), indent=0), what="dest")
     return [pt, js]

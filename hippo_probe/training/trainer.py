@@ -22,6 +22,7 @@ import torch
 import torch.nn.functional as F
 from tqdm.auto import tqdm
 
+from .._atomic import write_text
 from .._version import __version__
 from ..model.config import ModelConfig, input_scale_for
 from ..model.navigator import Navigator
@@ -379,8 +380,7 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
         log["best_validation_loss"] = best_loss
         checkpoint(last_state)        # the checkpoint keeps the last parameters
         save_network(net, config, log, run_dir / "network.pt")
-        with open(run_dir / "log.json", "w") as f:
-            json.dump(log, f, indent=1)
+        write_text(run_dir / "log.json", json.dumps(log, indent=1), what="out")
     if world > 1:
         torch.distributed.barrier()
     return log

@@ -14,6 +14,7 @@ import math
 import numba
 import numpy as np
 
+from .._angles import wrap_angle_scalar
 from .config import MotionConfig, SensorConfig
 
 
@@ -118,7 +119,7 @@ def _simulate(verts, start, heading0, speed_noise, turn_noise, n_steps, substeps
                         th = math.atan2(nny, nnx)
                     w = 0.0
             # keep the heading in [-pi, pi)
-            th = (th + math.pi) % (2.0 * math.pi) - math.pi
+            th = wrap_angle_scalar(th)
             pos[b, t, 0], pos[b, t, 1] = x, y
             heading[b, t] = th
             disp[b, t, 0], disp[b, t, 1] = x - x0, y - y0

@@ -8,17 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._angles import wrap_angle
 from .config import FEATURES, NoiseModel
 
 #: Standard normal draws needed per trial and network step (rows of ``noise_draws``).
 N_NOISE_DRAWS = 6
-
-
-def wrap_angle(a):
-    """Wrap angles to [-pi, pi)."""
-    r = (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-    # one ulp below -pi, the modulo rounds up to 2 pi and gives +pi: fold it back
-    return np.where(r >= np.pi, r - 2 * np.pi, r)
 
 
 def heading_drift(noise: NoiseModel, drift_draws: np.ndarray | None,

@@ -1,6 +1,7 @@
 """A writer killed in the middle of save_recording leaves nothing or the previous store."""
 
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -20,7 +21,7 @@ WRITER = textwrap.dedent("""
     import os, sys, time
     import numpy as np
     from hippo_probe.recording import RecordingConfig, from_arrays, save_recording
-    import hippo_probe.recording.store as store
+    import hippo_probe._atomic as atomic
 
     dest, mode, flag = sys.argv[1:4]
     n, units = 100_000, 32
@@ -34,7 +35,7 @@ WRITER = textwrap.dedent("""
             if str(b).split("/")[-1].startswith(".") and ".old-" in str(b):
                 open(flag, "w").close()
                 time.sleep(600)
-        store.os.rename = slow_rename
+        atomic.os.rename = slow_rename
     # small chunks: many files, so the kill lands in the middle of the data
     save_recording(rec, dest, overwrite=True, config=RecordingConfig(chunk_bytes=2**18))
 """)
@@ -84,16 +85,21 @@ def test_killed_writer_leaves_previous_store_or_nothing(tmp_path):
         proc.wait(timeout=30)
         assert proc.returncode == -signal.SIGKILL
 
-    # the overwritten store is the previous complete version, untouched
+    # the half-written temp store never opens as a recording (a copy: opening anything
+    # in tmp_path removes the dead writer's temporaries)
+    (partial,) = tmp_path.glob(".replaced.zarr.partial-*")
+    shutil.copytree(partial, tmp_path / "copy" / "half.zarr")
+    with pytest.raises(RecordingError, match="half-written"):
+        open_recording(tmp_path / "copy" / "half.zarr")
+    shutil.rmtree(tmp_path / "copy")
+    # the overwritten store is the previous complete version, untouched, and opening it
+    # cleaned what the dead writer left beside it
     xr.testing.assert_identical(open_recording(replaced).load(), previous)
+    assert not list(tmp_path.glob(".replaced.zarr.partial-*"))
     # killed after setting the old store aside: destination absent, the error says where
     assert not swapped.exists()
     with pytest.raises(FileNotFoundError, match="interrupted overwrite left the previous"):
         open_recording(swapped)
-    # the half-written temp store never opens as a recording
-    (partial,) = tmp_path.glob(".replaced.zarr.partial-*")
-    with pytest.raises(RecordingError, match="half-written"):
-        open_recording(partial)
     # the next saves clean up what the dead writers left
     for dest in (replaced, swapped):
         save_recording(previous, dest, overwrite=True)
@@ -136,6 +142,20 @@ def test_two_writers_to_one_new_path_one_wins_and_one_is_refused(tmp_path):
                               stdout=subprocess.PIPE, text=True) for v in (1.0, 3.0)]
     codes = [p.wait(timeout=120) for p in procs]
     assert codes == [0, 3], [p.stdout.read() for p in procs]
-    assert "appeared while the recording was being written" in procs[1].stdout.read()
+    assert "appeared while this was being written" in procs[1].stdout.read()
     assert float(open_recording(dest)["activity"][0, 0]) == 1.0
     assert not list(tmp_path.glob(".shared.zarr*"))           # nothing half-written left
+
+
+def test_lazily_made_nan_activity_fails_the_save_and_leaves_nothing(tmp_path):
+    """validate() cannot see values of a dask-backed recording without computing them;
+    the save checks each block as it writes it."""
+    rec = make_network_recording()
+    activity = rec["activity"].values.copy()
+    activity[7, 1] = np.nan
+    lazy = rec.assign(activity=rec["activity"].copy(data=activity)).chunk({"time": 50})
+    dest = tmp_path / "nan.zarr"
+    with pytest.raises(RecordingError, match=r"`activity` must not contain NaN or inf; "
+                                             r"found nan at index \(7, 1\)"):
+        save_recording(lazy, dest)
+    assert os.listdir(tmp_path) == []

@@ -58,3 +58,27 @@ def test_record_stays_a_function_after_its_module_is_imported():
 
     importlib.import_module("hippo_probe.model.record")
     assert callable(hp.record)
+
+
+def test_a_checkpoint_with_flipped_bytes_is_refused_not_resumed(tmp_path):
+    """64 flipped bytes inside a tensor: torch would load them; the digest refuses."""
+    import zipfile
+
+    from hippo_probe.training.checkpoint import save_atomic
+
+    path = tmp_path / "checkpoint.pt"
+    save_atomic({"model": {"w": torch.randn(64, 64)}, "model_config": {"hidden": 8},
+                 "step": 10}, path)
+    assert load(path)["step"] == 10
+    with zipfile.ZipFile(path) as z:
+        entry = next(i for i in z.infolist() if i.filename.endswith("/data/0"))
+    raw = bytearray(path.read_bytes())
+    # the local header is 30 bytes + name + extra; flip bytes well inside the data
+    name_len, extra_len = (int.from_bytes(raw[entry.header_offset + k:entry.header_offset
+                                              + k + 2], "little") for k in (26, 28))
+    start = entry.header_offset + 30 + name_len + extra_len + 1024
+    raw[start:start + 64] = bytes(b ^ 0xFF for b in raw[start:start + 64])
+    path.write_bytes(bytes(raw))
+    assert torch.load(path, weights_only=True)["step"] == 10     # torch does not notice
+    with pytest.raises(CheckpointError, match="is corrupt: its content does not match"):
+        load(path)

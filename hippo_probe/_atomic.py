@@ -1,0 +1,180 @@
+"""Atomic writes: the one mechanism by which the package puts a file or a store on disk.
+
+Everything is written to a hidden temporary beside the destination and renamed into
+place only when complete, so a crash (even ``kill -9``) leaves the previous file or the
+new one at the destination, never half of one. Temporaries are named
+``.NAME.partial-HOST-PID-UUID``; one whose writer is no longer running (same host, dead
+process) or that is older than :data:`STALE_AFTER_S` is garbage, and is removed by the
+next write (or :func:`remove_stale` call) in that folder.
+
+Without ``overwrite`` the final step refuses an existing destination atomically (a hard
+link for a file, a rename onto a non-empty directory for a store), so two concurrent
+writers of one new path cannot both succeed.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import shutil
+import socket
+import time
+import uuid
+from contextlib import contextmanager
+from pathlib import Path
+
+PARTIAL = ".partial-"
+OLD = ".old-"
+STALE_AFTER_S = 24 * 3600.0      # a temporary from another host is trusted this long
+_HOST = socket.gethostname().replace("-", "_") or "host"
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:           # alive, owned by someone else
+        return True
+    return True
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        try:
+            path.unlink()
+        except FileNotFoundError:
+            pass
+
+
+def _is_stale(item: Path, now: float) -> bool:
+    host, _, rest = item.name.rpartition(PARTIAL)[2].partition("-")
+    pid = rest.split("-")[0]
+    if host == _HOST and pid.isdigit():
+        return not _pid_alive(int(pid))
+    try:
+        return now - item.lstat().st_mtime > STALE_AFTER_S
+    except FileNotFoundError:
+        return False
+
+
+def remove_stale(folder) -> list[Path]:
+    """Remove the temporaries in ``folder`` left by writers that died; returns them.
+
+    Also removes a previous copy set aside by an overwrite (``.NAME.old-UUID``) once the
+    new copy is in place at ``NAME``.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        return []
+    now = time.time()
+    removed = []
+    for item in folder.glob(f".*{PARTIAL}*"):
+        if _is_stale(item, now):
+            _remove(item)
+            removed.append(item)
+    for item in folder.glob(f".*{OLD}*"):
+        name = item.name[1:].rpartition(OLD)[0]
+        if name and (folder / name).exists():
+            _remove(item)
+            removed.append(item)
+    return removed
+
+
+def temporary_beside(dest: Path) -> Path:
+    """A fresh hidden temporary path in ``dest``'s folder, named after ``dest``."""
+    return dest.parent / f".{dest.name}{PARTIAL}{_HOST}-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+
+
+def _fsync(path: Path) -> None:
+    with open(path, "rb") as f:
+        os.fsync(f.fileno())
+
+
+def _publish(tmp: Path, dest: Path, overwrite: bool, what: str) -> None:
+    exists = dest.exists() or dest.is_symlink()
+    if exists and not overwrite:      # it was absent when the write began
+        raise FileExistsError(_appeared(what, dest))
+    if tmp.is_dir():
+        if exists:
+            old = dest.parent / f".{dest.name}{OLD}{uuid.uuid4().hex[:8]}"
+            os.rename(dest, old)
+            os.rename(tmp, dest)
+            _remove(old)
+            return
+        try:                          # onto a non-empty directory this fails: no race
+            os.rename(tmp, dest)
+        except OSError as err:
+            if err.errno in (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR, errno.EISDIR):
+                raise FileExistsError(_appeared(what, dest)) from None
+            raise
+        return
+    _fsync(tmp)
+    if overwrite:
+        os.replace(tmp, dest)
+        return
+    try:                              # a hard link never replaces: the atomic refusal
+        os.link(tmp, dest)
+    except FileExistsError:
+        raise FileExistsError(_appeared(what, dest)) from None
+    except OSError:                   # a filesystem without hard links
+        if dest.exists():
+            raise FileExistsError(_appeared(what, dest)) from None
+        os.rename(tmp, dest)
+        return
+    tmp.unlink()
+
+
+def _appeared(what: str, dest: Path) -> str:
+    return (f"`{what}` appeared while this was being written (another writer?): {dest}; "
+            f"it was kept. Pass overwrite=True to replace it")
+
+
+@contextmanager
+def atomic_path(dest, *, overwrite: bool = False, what: str = "path"):
+    """Context manager yielding a temporary path to write; moved to ``dest`` on success.
+
+    The body writes a file or a directory (a zarr store) at the yielded path. On a clean
+    exit it is fsynced (a file) and renamed to ``dest``; on an exception, or if the
+    destination exists and ``overwrite`` is False, it is deleted and ``dest`` is left as
+    it was. Stale temporaries in the folder are removed first.
+
+    Parameters
+    ----------
+    dest : str or os.PathLike
+        The destination file or directory. Its folder is created if missing.
+    overwrite : bool
+        Replace an existing ``dest`` (a directory is swapped: old aside, new in, old
+        deleted).
+    what : str
+        The argument's name, for error messages.
+
+    Raises
+    ------
+    FileExistsError
+        ``dest`` exists (or appeared during the write) and ``overwrite`` is False.
+    """
+    dest = Path(dest)
+    if (dest.exists() or dest.is_symlink()) and not overwrite:
+        raise FileExistsError(f"`{what}` already exists: {dest}; pass overwrite=True to "
+                              f"replace it")
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale(dest.parent)
+    tmp = temporary_beside(dest)
+    try:
+        yield tmp
+        _publish(tmp, dest, overwrite, what)
+        remove_stale(dest.parent)     # e.g. a copy set aside by an overwrite that died
+    finally:
+        if tmp.exists() or tmp.is_symlink():
+            _remove(tmp)
+
+
+def write_text(path, text: str, *, overwrite: bool = True, what: str = "path") -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically."""
+    path = Path(path)
+    with atomic_path(path, overwrite=overwrite, what=what) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return path

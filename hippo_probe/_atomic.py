@@ -85,7 +85,9 @@ def remove_stale(folder) -> list[Path]:
 
 def temporary_beside(dest: Path) -> Path:
     """A fresh hidden temporary path in ``dest``'s folder, named after ``dest``."""
-    return dest.parent / f".{dest.name}{PARTIAL}{_HOST}-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+    # the suffix is kept: some writers (pynwb, numpy) check or append it
+    return (dest.parent / f".{dest.name}{PARTIAL}{_HOST}-{os.getpid()}-"
+                          f"{uuid.uuid4().hex[:8]}{dest.suffix}")
 
 
 def _fsync(path: Path) -> None:
@@ -95,6 +97,10 @@ def _fsync(path: Path) -> None:
 
 def _publish(tmp: Path, dest: Path, overwrite: bool, what: str) -> None:
     exists = dest.exists() or dest.is_symlink()
+    if exists and dest.is_dir() != tmp.is_dir():
+        raise FileExistsError(f"`{what}` {dest} is a {'directory' if dest.is_dir() else 'file'}"
+                              f"; refusing to replace it with a "
+                              f"{'directory' if tmp.is_dir() else 'file'}")
     if exists and not overwrite:      # it was absent when the write began
         raise FileExistsError(_appeared(what, dest))
     if tmp.is_dir():
@@ -177,4 +183,12 @@ def write_text(path, text: str, *, overwrite: bool = True, what: str = "path") -
     path = Path(path)
     with atomic_path(path, overwrite=overwrite, what=what) as tmp:
         tmp.write_text(text, encoding="utf-8")
+    return path
+
+
+def save_figure(fig, path, **savefig_kwargs) -> Path:
+    """``fig.savefig`` to ``path`` atomically, in the format its suffix names."""
+    path = Path(path)
+    with atomic_path(path, overwrite=True, what="path") as tmp:
+        fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", **savefig_kwargs)
     return path

@@ -87,6 +87,7 @@ def _update_readme_images(out):
 
 
 def _main(args):
+    from ._atomic import save_figure
     from .world.stats import format_stats, plot_example_trials, world_stats
 
     out = Path(args.out)
@@ -94,6 +95,6 @@ def _main(args):
     print("== World statistics (500 test trials per task) ==")
     print(format_stats(world_stats(n_trials=500)))
     fig = plot_example_trials()
-    fig.savefig(out / "example_trials.png", dpi=120)
+    save_figure(fig, out / "example_trials.png", dpi=120)
     print(f"saved {out / 'example_trials.png'}")
     _figures(args.__class__(out=args.out, size=args.size, only=None))

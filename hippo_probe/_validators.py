@@ -108,3 +108,45 @@ def check_variables(name: str, ds, variables: Iterable[str], *, why: str = ""):
             f"`{name}` must contain {missing}{reason}; it has {sorted(map(str, ds.variables))}"
         )
     return ds
+
+
+def check_real(name: str, array):
+    """Return ``array`` if it holds real numbers (refuses complex: its imaginary part would
+    be dropped silently by a cast, and booleans, strings and objects)."""
+    array = np.asarray(array)
+    if array.dtype.kind not in "iuf":
+        what = ("complex numbers (the imaginary part would be lost)"
+                if array.dtype.kind == "c" else f"dtype {array.dtype}")
+        raise TypeError(f"`{name}` must hold real numbers; got {what}")
+    return array
+
+
+def check_seed(name: str, value):
+    """Return ``value`` if it can seed :func:`numpy.random.default_rng` (None, an int >= 0
+    or a ``numpy.random.Generator``/``SeedSequence``)."""
+    if value is None or isinstance(value, (np.random.Generator, np.random.SeedSequence)):
+        return value
+    return check_nonnegative_int(name, value)
+
+
+def check_path(name: str, value):
+    """Return ``value`` as a ``pathlib.Path`` (str, bytes or os.PathLike accepted)."""
+    import os
+    from pathlib import Path
+
+    if isinstance(value, (str, bytes, os.PathLike)):
+        path = os.fsdecode(os.fspath(value))
+        if path:
+            return Path(path)
+    raise TypeError(f"`{name}` must be a file path (str or os.PathLike); got {_fmt(value)}")
+
+
+def check_allocation(name: str, shape, itemsize: int = 8, *, limit: int = 2**31):
+    """Refuse, before allocating it, a result of ``shape`` larger than ``limit`` bytes
+    (default 2 GiB), naming the argument that set its size and the memory it would take."""
+    n_bytes = int(np.prod([int(s) for s in shape], dtype=np.float64)) * itemsize
+    if n_bytes > limit:
+        raise ValueError(f"`{name}` asks for a result of shape {tuple(int(s) for s in shape)}"
+                         f" ({n_bytes / 2**30:.1f} GiB, more than the {limit / 2**30:.0f} "
+                         f"GiB limit); choose fewer or larger bins")
+    return shape

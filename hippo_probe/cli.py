@@ -45,7 +45,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.run(args) or 0)
-    except (ValueError, FileNotFoundError, FileExistsError) as err:
+    except (ValueError, FileNotFoundError, FileExistsError, IsADirectoryError,
+            NotADirectoryError, PermissionError) as err:
         # bad input: one clear line, no traceback
         print(f"hippo-probe {args.command}: error: {err}", file=sys.stderr)
         return 2

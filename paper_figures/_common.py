@@ -22,6 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import hippo_probe as hp  # noqa: E402
+from hippo_probe._atomic import atomic_path  # noqa: E402
 from hippo_probe.tasks import make_trials, task_config  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -189,10 +190,8 @@ def cached_arrays(name: str, cfg: FigureConfig, make, *key_parts) -> dict:
             if str(f["_key"]) == key:
                 return {k: f[k] for k in f.files if k != "_key"}
     out = make()
-    cfg.cache.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, _key=key, **out)
-    tmp.replace(path)
+    with atomic_path(path, overwrite=True) as tmp, open(tmp, "wb") as f:
+        np.savez(f, _key=key, **out)
     return out
 
 

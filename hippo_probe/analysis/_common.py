@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from .._validators import check_number, check_option, check_variables
+from .._validators import check_number, check_option, check_seed, check_variables
 from .._version import __version__
 from .config import CONVENTIONS, SHUFFLE
 
@@ -24,6 +24,9 @@ def check_recording(rec, variables=(), *, why="", name="rec"):
             f"got {type(rec).__name__}"
         )
     check_variables(name, rec, variables, why=why)
+    if rec.sizes.get("time", 1) == 0:
+        raise ValueError(f"`{name}` has 0 samples (its `time` is empty): nothing to "
+                         f"analyse" + (f" for {why}" if why else ""))
     return rec
 
 
@@ -172,7 +175,7 @@ def circular_shifts(n: int, dt: float, n_shuffles: int, seed: int | None) -> np.
     low = min(low, n // 4)
     if n_shuffles and n - 2 * low < 1:
         raise ValueError(f"`n_shuffles` needs a recording of at least 4 samples; got {n}")
-    rng = np.random.default_rng(SHUFFLE.seed if seed is None else seed)
+    rng = np.random.default_rng(SHUFFLE.seed if seed is None else check_seed("seed", seed))
     return rng.integers(max(low, 1), n - max(low, 1) + 1, size=n_shuffles)
 
 

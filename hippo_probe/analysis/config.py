@@ -63,6 +63,11 @@ class RateMapConfig:
     few_samples_ratio : float
         Warn when there are fewer valid samples than this times the number of bins: most
         bins would then be unvisited (NaN).
+    outlier_fraction, outlier_stretch : float
+        When the extent comes from the positions, warn if the ``outlier_fraction`` (1%)
+        of samples at either end of an axis stretch it more than ``outlier_stretch``
+        (1.5) times the span of the rest: a few far tracking glitches would otherwise
+        coarsen every bin and wash out place fields. Pass ``extent=`` to choose the bins.
     """
 
     n_bins: int = 32
@@ -71,6 +76,8 @@ class RateMapConfig:
     min_occupancy: float = 0.0
     extent_margin: float = 1e-9
     few_samples_ratio: float = 1.0
+    outlier_fraction: float = 0.01
+    outlier_stretch: float = 1.5
 
 
 @dataclass(frozen=True)
@@ -245,6 +252,242 @@ class ComputeConfig:
     min_samples_per_thread: int = 50_000
 
 
+@dataclass(frozen=True)
+class PlaceFieldConfig:
+    """Defaults of :func:`hippo_probe.analysis.place_fields`.
+
+    Attributes
+    ----------
+    threshold : float
+        A field is a contiguous set of bins whose rate exceeds 20% of the map's range above
+        its minimum, ``min + 0.2 (peak - min)``; for spike maps (minimum about 0) this is
+        the customary 20% of the peak rate (e.g. Leutgeb et al. 2007, Science 315:961;
+        Langston et al. 2010). The range, not the peak alone, makes the rule
+        offset-invariant, so it applies to the LSTM's signed h.
+    min_bins : int
+        Fields of fewer than 9 bins are noise (opexebo's and the BNT's
+        ``firing_field_min_bins``).
+    min_peak : float or None
+        Minimum peak rate of a field, in the map's units; None = none (an absolute rate has
+        no meaning for network activity, whose h may peak below 0; use e.g. 1 Hz for
+        spikes, opexebo's default).
+    connectivity : int
+        Bins touching by an edge (1, 4-connectivity) or also by a corner (2,
+        8-connectivity) belong to one field (``scipy.ndimage.generate_binary_structure``);
+        4-connectivity, as opexebo and the BNT.
+    """
+
+    threshold: float = 0.2
+    min_bins: int = 9
+    min_peak: float | None = None
+    connectivity: int = 1
+
+
+@dataclass(frozen=True)
+class GridConfig:
+    """Defaults of :func:`hippo_probe.analysis.grid_score`.
+
+    Attributes
+    ----------
+    min_overlap : int
+        Lags of the spatial autocorrelogram with fewer than 20 bins visited in both the map
+        and its shifted copy are NaN: their correlation rests on too few bins
+        (Sargolini et al. 2006; Hafting et al. 2005).
+    central_threshold : float
+        The central peak of the autocorrelogram is the connected region around zero lag
+        where r > 0.1; its radius is that of the disc of the same area (floored to whole
+        bins, as the BNT/opexebo) and is excluded from the annulus.
+    peak_threshold : float
+        The peaks around the centre (for spacing, orientation and the ``"peaks"`` annulus)
+        are local maxima of the autocorrelogram with r > 0.1 (opexebo's threshold).
+    min_orientation : float
+        Of two peaks in directions less than 15 degrees apart, the farther is dropped
+        (opexebo/BNT ``min_orientation``): it belongs to the next ring.
+    max_radius : float
+        The annulus' outer radius reaches at most 0.9 x the shorter side of the map (in
+        bins): opexebo/BNT keep the lags of 80% overlap, whose half-width is 0.9 sides.
+    max_central : float
+        The central peak's radius must be less than half the largest outer radius, else the
+        grid score is NaN: the first ring of a grid's peaks lies at about twice the central
+        radius or more, so a wider central peak (a broad or ramp-like map, common in
+        networks) leaves only a thin ring of the most extreme lags, whose "score" is noise.
+    window : int
+        The ``"sweep"`` annulus: gridness of every outer radius, averaged over 3
+        consecutive radii, maximum taken (Langston et al. 2010 as in the BNT and opexebo,
+        ``numGridnessRadii = 3``).
+    min_outer : int
+        The sweep's first outer radius is the central radius + 1 bin, and at least 3 bins
+        (the BNT and opexebo): a thinner ring holds too few lags for a correlation.
+    annulus : str
+        ``"sweep"`` (Langston et al. 2010; BNT, opexebo) or ``"peaks"`` (Sargolini et al.
+        2006: the annulus reaches the six peaks around the centre plus one central radius).
+    sigma : float
+        Gaussian smoothing of the maps (bins) when made here: one bin, as displayed maps.
+    """
+
+    min_overlap: int = 20
+    central_threshold: float = 0.1
+    peak_threshold: float = 0.1
+    min_orientation: float = 15.0
+    max_radius: float = 0.9
+    max_central: float = 0.5
+    window: int = 3
+    min_outer: int = 3
+    annulus: str = "sweep"
+    sigma: float = 1.0
+
+
+@dataclass(frozen=True)
+class BorderConfig:
+    """Defaults of :func:`hippo_probe.analysis.border_score`.
+
+    Attributes
+    ----------
+    threshold : float
+        Fields for the border score are contiguous bins above 30% of the map's range above
+        its minimum (of the peak, for spike maps), Solstad et al. 2008.
+    min_area : float
+        ... covering at least 200 cm^2 (0.02 m^2), Solstad et al. 2008; never fewer than
+        ``min_bins`` bins.
+    min_bins : int
+        A field has at least 2 bins, whatever the bin size.
+    search_width : int
+        A wall's coverage looks up to 8 bins inwards (along the wall's normal) for the
+        first visited bin (opexebo/BNT ``search_width``): unvisited bins along a wall do not
+        break a field's contact with it.
+    merge_angle : float
+        Consecutive polygon edges turning by less than 30 degrees (from the wall's first
+        edge) are one wall: the random star-shaped arenas have many nearly collinear
+        edges, and Solstad's coverage is per straight side.
+    min_wall_bins : int
+        A wall shorter than 4 bins is not used for coverage (a corner-sized wall is covered
+        by any field in the corner); it still bounds the arena for distances.
+    sigma : float
+        Gaussian smoothing of the maps (bins) when made here.
+    """
+
+    threshold: float = 0.3
+    min_area: float = 0.02
+    min_bins: int = 2
+    search_width: int = 8
+    merge_angle: float = 30.0
+    min_wall_bins: int = 4
+    sigma: float = 1.0
+
+
+@dataclass(frozen=True)
+class SpeedConfig:
+    """Defaults of :func:`hippo_probe.analysis.speed_score` (Kropff et al. 2015).
+
+    Attributes
+    ----------
+    sigma : float
+        Activity and speed are smoothed in time, within trials, by a Gaussian of 0.25 s
+        s.d. (Kropff et al. 2015: 250 ms) before they are correlated; 0 = none.
+    min_speed, max_speed : float
+        Only samples with a speed in [0.02, 0.5] m/s count (Kropff et al. 2015: 2-50 cm/s):
+        rest and implausible tracking jumps are left out.
+    block : int
+        Samples per block of the correlation of activity with the shifted speeds (memory
+        ``block x n_shuffles`` floats).
+    """
+
+    sigma: float = 0.25
+    min_speed: float = 0.02
+    max_speed: float = 0.5
+    block: int = 8192
+
+
+@dataclass(frozen=True)
+class ConjunctiveConfig:
+    """Defaults of :func:`hippo_probe.analysis.conjunctive_tuning`.
+
+    Attributes
+    ----------
+    n_bins : int
+        16 spatial bins along the extent's longer side and ...
+    n_directions : int
+        ... 12 head-direction bins of 30 degrees: the joint (position x direction) map has
+        16 x 16 x 12 cells, each of which needs samples (Burgess et al. 2005 used similarly
+        coarse bins for the factorial model).
+    n_iterations, tolerance : int, float
+        The factorial model is iterated until the factors change by less than 1e-5
+        (relative) or 50 times.
+    batch : int
+        Shuffles whose joint sums are held at once (memory ``batch x units x cells``).
+    """
+
+    n_bins: int = 16
+    n_directions: int = 12
+    n_iterations: int = 50
+    tolerance: float = 1e-5
+    batch: int = 10
+
+
+@dataclass(frozen=True)
+class CellClassConfig:
+    """Defaults of :func:`hippo_probe.analysis.classify_cells` and of the shuffles of the
+    cell-class scores.
+
+    A unit belongs to a class when its score exceeds the given percentile of its own
+    time-shift shuffles (``threshold="unit"``) or of all units' shuffles pooled
+    (``threshold="pooled"``, the papers' practice).
+
+    Attributes
+    ----------
+    n_shuffles : int
+        100 circular time shifts (each at least ``ShuffleConfig.min_shift``), as
+        Langston et al. 2010 and Kropff et al. 2015; p-values resolve to 1/101.
+    grid_percentile : float
+        Grid cells: grid score above the 95th percentile of the shuffles (Langston et al.
+        2010; Wills et al. 2010; Boccara et al. 2010).
+    border_percentile, border_min_score : float
+        Border cells: border score above the 99th percentile of the shuffles (Bjerknes et
+        al. 2014; Kropff et al. 2015) and above 0.5 (Solstad et al. 2008).
+    place_percentile : float
+        Place cells: Skaggs information (unsmoothed map) above the 95th percentile of the
+        shuffles (Langston et al. 2010; Wills et al. 2010) and at least one place field.
+    hd_percentile : float
+        Head-direction cells: mean vector length above the 99th percentile of the
+        shuffles (Boccara et al. 2010).
+    speed_percentile : float
+        Speed cells: speed score above the 99th percentile of the shuffles (Kropff et al.
+        2015); positive speed cells only.
+    conjunctive_percentile : float
+        Conjunctive (position x direction) cells: both factors of the factorial model
+        (Burgess et al. 2005) above the 99th percentile of their shuffles.
+    spatial_gate : bool
+        Grid and border cells must also carry significant spatial information (above
+        ``place_percentile`` of its shuffles): the score of a spatially flat map is noise,
+        and each per-unit test alone lets through its nominal 5% (grid) of such maps.
+    factorial_gate : bool
+        Place cells must keep significant information in the position factor of the
+        factorial (position x direction) model, and head-direction cells a significant
+        direction factor, each above its class's percentile (Burgess et al. 2005): where
+        position and direction are sampled together (wall following, small arenas), a
+        head-direction cell has a structured rate map and a place cell a tuned
+        direction curve; the model explains each away.
+    threshold : str
+        ``"unit"`` (each unit against its own shuffles) or ``"pooled"``.
+    precedence : tuple of str
+        The single ``cell_class`` label of a unit in several classes: the first class of
+        this list it belongs to (the boolean columns keep every membership).
+    """
+
+    n_shuffles: int = 100
+    grid_percentile: float = 95.0
+    border_percentile: float = 99.0
+    border_min_score: float = 0.5
+    place_percentile: float = 95.0
+    hd_percentile: float = 99.0
+    speed_percentile: float = 99.0
+    conjunctive_percentile: float = 99.0
+    spatial_gate: bool = True
+    factorial_gate: bool = True
+    threshold: str = "unit"
+    precedence: tuple = ("conjunctive", "grid", "border", "place", "head_direction",
+                         "speed")
+
 CONVENTIONS = RecordingConventions()
 COMPUTE = ComputeConfig()
 RATEMAP = RateMapConfig()
@@ -255,3 +498,9 @@ STABILITY = StabilityConfig()
 REMAPPING = RemappingConfig()
 DECODING = DecodingConfig()
 CORRELATION_DIMENSION = CorrelationDimensionConfig()
+PLACE_FIELD = PlaceFieldConfig()
+GRID = GridConfig()
+BORDER = BorderConfig()
+SPEED = SpeedConfig()
+CONJUNCTIVE = ConjunctiveConfig()
+CELL_CLASS = CellClassConfig()

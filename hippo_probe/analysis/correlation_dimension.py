@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validators import check_number
+from .._validators import check_number, check_seed
 from . import _common
 from .config import CORRELATION_DIMENSION as CFG
 
@@ -13,7 +13,7 @@ from .config import CORRELATION_DIMENSION as CFG
 
 def _points(data, *, max_points, transient, seed):
     """Select at most ``max_points`` samples; returns (points, order, trial, info)."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(check_seed("seed", seed))
     if isinstance(data, xr.Dataset):
         _common.check_recording(data, ["activity"], why="correlation dimension")
         n = data.sizes["time"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validators import check_number
+from .._validators import check_number, check_seed
 from . import _common
 from .config import COMPUTE, DECODING
 
@@ -155,7 +155,7 @@ def decode_covariance(rec, target="pf_cov", *, n_folds=None, alphas=None, seed=0
     if len(trials) < n_folds:
         raise ValueError(f"`n_folds` must be <= the number of trials with a finite "
                          f"`{target}` ({len(trials)}); got {n_folds}")
-    order = np.random.default_rng(seed).permutation(len(trials))
+    order = np.random.default_rng(check_seed("seed", seed)).permutation(len(trials))
     trial_fold = np.empty(len(trials), np.int64)
     trial_fold[order] = np.arange(len(trials)) % n_folds
     sample_fold = np.full(len(trial), -1, np.int64)

@@ -6,7 +6,7 @@ import numpy as np
 import xarray as xr
 
 from .._angles import wrap_angle
-from .._validators import check_number
+from .._validators import check_allocation, check_number
 from . import _common
 from .config import HEAD_DIRECTION
 from .ratemaps import smooth_normalized, tuning_sums, warn_nonfinite
@@ -136,6 +136,7 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     codes, labels, dim = _common.group_codes(rec, by)
     n_groups = 1 if labels is None else len(labels)
     shifts = np.r_[0, _common.circular_shifts(rec.sizes["time"], dt, n_shuffles, seed)]
+    check_allocation("n_bins", (len(shifts), rec.sizes["unit"], n_groups, n_bins))
     res = tuning_sums(rec, bins, codes, n_groups, n_bins, shifts)
     sums, counts = res.sums, res.counts
     warn_nonfinite(rec, res, "tuning curves")

@@ -9,7 +9,7 @@ import numpy as np
 import xarray as xr
 from scipy import ndimage
 
-from .._validators import check_number, check_shape
+from .._validators import check_allocation, check_number, check_shape
 from . import _common
 from ._binning import BinSums, bin_sums, compact, grid_bins
 from ._common import AnalysisWarning
@@ -69,6 +69,23 @@ def _arena_vertices(rec):
     return ids, _common.values(verts.transpose(..., "space")).astype(float)
 
 
+def _warn_outliers_set_extent(x, y, lo, hi):
+    """Warn when a few samples at the ends of an axis set most of the extent (config
+    ``RATEMAP.outlier_fraction`` and ``outlier_stretch``)."""
+    q = RATEMAP.outlier_fraction
+    for axis, values, a, b in (("x", x, lo[0], hi[0]), ("y", y, lo[1], hi[1])):
+        core_lo, core_hi = np.nanquantile(values, [q, 1 - q])
+        span = max(core_hi - core_lo, 1e-12)
+        if (b - a) > RATEMAP.outlier_stretch * span:
+            margin = 0.25 * span            # count the far samples, not the core's tails
+            n_out = int(((values < core_lo - margin) | (values > core_hi + margin)).sum())
+            warnings.warn(
+                f"{n_out} of {int(np.isfinite(values).sum())} samples stretch the {axis} "
+                f"extent to [{a:.3g}, {b:.3g}] m while the rest lie in [{core_lo:.3g}, "
+                f"{core_hi:.3g}] m: the bins are coarser than intended. Pass `extent=` "
+                f"(or clean the tracking)", AnalysisWarning, stacklevel=4)
+
+
 def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None, xy=None) -> Grid:
     """The bins of a recording's rate maps.
 
@@ -89,6 +106,7 @@ def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None, xy=None) -> Gr
             if not np.isfinite(np.r_[lo, hi]).all():
                 raise ValueError("`rec.position` has no finite sample: cannot place bins "
                                  "(all positions are NaN)")
+            _warn_outliers_set_extent(x, y, lo, hi)
             pad = RATEMAP.extent_margin * np.maximum(hi - lo, 1e-12)
             extent = (lo[0] - pad[0], hi[0] + pad[0], lo[1] - pad[1], hi[1] + pad[1])
     extent = tuple(float(e) for e in check_shape("extent", np.asarray(extent, float), (4,)))
@@ -208,6 +226,7 @@ def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent
     if n_valid == 0:
         raise ValueError(f"no sample left to map: {dropped} (of {len(bins)} samples)")
     n_cells = grid.nx * grid.ny * n_groups
+    check_allocation("bin_size", (len(shifts), rec.sizes["unit"], n_groups, grid.ny, grid.nx))
     if n_valid < RATEMAP.few_samples_ratio * n_cells:
         warnings.warn(f"only {n_valid} valid samples for {n_cells} bins: most bins are "
                       "unvisited and NaN; use a larger `bin_size`", AnalysisWarning,

@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from .._validators import check_number
+from .._validators import check_number, check_seed
 from . import _common
 from .config import REMAPPING
 from .ratemaps import _ratemap_parts
@@ -137,7 +137,8 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
             maps = maps - np.nanmean(maps.reshape(n_units, -1), axis=1)[:, None, None]
     r, common = pair_correlations(maps, min_common)
     env = _common.values(rec["environment"])[np.unique(parts["codes"], return_index=True)[1]]
-    rng = np.random.default_rng(REMAPPING.seed if seed is None else seed)
+    rng = np.random.default_rng(REMAPPING.seed if seed is None
+                                else check_seed("seed", seed))
     permuted = rng.permutation(env)
     ia, ib = np.triu_indices(n_trials, k=1)
     sim = r[ia, ib]

@@ -36,6 +36,7 @@ def _baselines(args):
     import time
     from pathlib import Path
 
+    from .._atomic import save_figure
     from .._validators import check_option
     from ..tasks import SPLITS, TASKS, make_trials, task_config
     from .config import BaselineConfig, NaiveBayesConfig
@@ -59,7 +60,5 @@ def _baselines(args):
     print(error_table(ds))
     print(f"saved {out} ({time.perf_counter() - began:.0f} s)")
     if args.plot:
-        plot = Path(args.plot)
-        plot.parent.mkdir(parents=True, exist_ok=True)
-        plot_errors(ds).savefig(plot, dpi=150)
+        plot = save_figure(plot_errors(ds), args.plot, dpi=150)
         print(f"saved {plot}")

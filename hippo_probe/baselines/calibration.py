@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validators import check_seed
+
 
 def posterior_ranks(result, batch, *, seed: int = 0) -> dict:
     """Ranks (K * B,) of the truth among the kept particles of ``result`` (module
@@ -49,7 +51,7 @@ def posterior_ranks(result, batch, *, seed: int = 0) -> dict:
     own = np.einsum("kbnd,kbde,kbne->kbn", d, inv, d)
     e = truth - mean
     true = np.einsum("kbd,kbde,kbe->kb", e, inv, e)
-    angle = np.random.default_rng(seed).uniform(0, 2 * np.pi, truth.shape[:2])
+    angle = np.random.default_rng(check_seed("seed", seed)).uniform(0, 2 * np.pi, truth.shape[:2])
     u = np.stack([np.cos(angle), np.sin(angle)], axis=-1)
     along = np.einsum("kbnd,kbd->kbn", p, u)
     true_along = np.einsum("kbd,kbd->kb", truth, u)

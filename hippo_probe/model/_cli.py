@@ -1,5 +1,7 @@
 """``hippo-probe record`` and ``hippo-probe export-network``."""
 
+from pathlib import Path
+
 from ..tasks import SPLITS, TASKS
 
 
@@ -37,6 +39,11 @@ def _record(a):
     from ..tasks import make_trials
     from .record import record
 
+    from .._validators import check_positive
+
+    check_positive("--trials", a.trials, integer=True)
+    if (Path(a.out).exists() or Path(a.out).is_symlink()) and not a.overwrite:
+        raise FileExistsError(f"--out {a.out} already exists; pass --overwrite to replace it")
     net = load_pretrained(a.network)
     task = a.task or net.task
     batch = make_trials(task, a.trials, a.split, a.seed, world=a.world or net.world)

@@ -8,6 +8,8 @@ classifier's weights, the arena geometry, and optionally the baselines' estimate
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import torch
 
@@ -107,9 +109,18 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
     >>> rec = hp.record(net, batch)                                   # doctest: +SKIP
     >>> hp.ratemaps(rec)                                              # doctest: +SKIP
     """
+    if batch.inputs.shape[1] == 0:
+        raise ValueError("`batch` holds 0 trials: nothing to record (make at least one "
+                         "trial, e.g. --trials 1)")
+    task = batch.checked_config(config)
+    net_world = (getattr(network, "info", None) or {}).get("world")
+    if net_world is not None and net_world != task.world.name:
+        warnings.warn(f"`network` was trained in the {net_world!r} world but `batch` holds "
+                      f"{task.world.name!r} trials: its units are recorded outside the "
+                      f"world they learned (the recording's attrs say both)", UserWarning,
+                      stacklevel=2)
     h, xy, prob = run_network(network, batch, chunk)
     T, B, H = h.shape
-    task = batch.checked_config(config)
     net_task = getattr(network, "task", None) or batch.task
     # the readout speaks in the frame of the task the network was trained on
     if task_config(net_task).target == "start_relative":

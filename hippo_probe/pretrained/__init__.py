@@ -8,7 +8,8 @@ generalized network with a retrained arena readout); the compass world's as
 ``localization_compass``, ``generalized_compass``, ``specialized_compass`` and
 ``generalized_compass_readout``, kept for the ablation (what the compass takes away).
 A network knows its world (``net.world``): record it, evaluate it and compare it with
-baselines on trials of that world.
+baselines on trials of that world. Each name may ship several training seeds:
+``<name>.pt`` is the seed reported first (``seed=0``), ``<name>_seed<k>.pt`` seed ``k``.
 """
 
 from __future__ import annotations
@@ -36,15 +37,40 @@ def available() -> list:
     return sorted(p.stem for p in HERE.glob("*.pt"))
 
 
-def resolve_network_file(name_or_path) -> Path:
-    """A shipped network's file by name, or a path to a network/checkpoint file."""
-    candidate = HERE / f"{name_or_path}.pt"
+def shipped_seeds(name: str) -> list[int]:
+    """Training seeds shipped for the network ``name`` (e.g. ``[0, 1, 2]``)."""
+    seeds = [0] if (HERE / f"{name}.pt").exists() else []
+    seeds += sorted(int(p.stem.rpartition("_seed")[2]) for p in HERE.glob(f"{name}_seed*.pt")
+                    if p.stem.rpartition("_seed")[2].isdigit())
+    return seeds
+
+
+def resolve_network_file(name_or_path, seed=None) -> Path:
+    """A shipped network's file by name (and training ``seed``, default 0), or a path to a
+    network/checkpoint file."""
+    import os
+
+    from .._validators import check_nonnegative_int
+
+    if not isinstance(name_or_path, (str, os.PathLike)) or not str(name_or_path):
+        raise TypeError(f"`name` must be a shipped network's name (one of {list(NAMES)}) or "
+                        f"a path to a .pt file; got {name_or_path!r}")
+    seed = None if seed is None else check_nonnegative_int("seed", seed)
     if str(name_or_path) in NAMES:
+        candidate = HERE / (f"{name_or_path}.pt" if not seed
+                            else f"{name_or_path}_seed{seed}.pt")
         if candidate.exists():
             return candidate    # a shipped name wins over a same-named local folder
+        if seed and shipped_seeds(str(name_or_path)):
+            raise ValueError(f"`seed` {seed} of the network {name_or_path!r} is not shipped; "
+                             f"shipped seeds: {shipped_seeds(str(name_or_path))}")
         if not Path(name_or_path).exists():
             raise ValueError(f"the network {name_or_path!r} is not shipped in this version "
                              f"(its training has not finished); shipped: {available()}")
+    elif seed is not None:
+        raise ValueError(f"`seed` selects among the shipped networks' training seeds; "
+                         f"{name_or_path!r} is a file, so seed must be None; got {seed}")
+    candidate = HERE / f"{name_or_path}.pt"
     path = Path(name_or_path)
     if path.is_dir() and (path / "network.pt").exists():
         return path / "network.pt"      # a training run's directory
@@ -56,11 +82,20 @@ def resolve_network_file(name_or_path) -> Path:
     return candidate
 
 
-def load_pretrained(name: str):
+def load_pretrained(name: str, seed: int | None = None):
     """Load a shipped network (or a network/checkpoint file) as a Navigator in eval mode.
 
     The network runs float32 whatever precision trained it (``net.info["config"]`` says
     which), so its outputs, and gradients taken through it, are the same everywhere.
+
+    Parameters
+    ----------
+    name : str or os.PathLike
+        A shipped network's name (:data:`NAMES`) or the path of a ``.pt`` file (a
+        shipped-network file, a training checkpoint or a run directory).
+    seed : int, optional
+        The training seed of a shipped network (default: the one reported first, 0);
+        :func:`shipped_seeds` lists them.
 
     Examples
     --------
@@ -73,15 +108,21 @@ def load_pretrained(name: str):
 
     from ..model.config import ModelConfig
     from ..model.navigator import Navigator
-    from ..training.checkpoint import load
+    from ..training.checkpoint import load, load_into
 
-    path = resolve_network_file(name)
+    from ..errors import CheckpointError
+
+    path = resolve_network_file(name, seed)
     obj = load(path)
     config = obj["model_config"]
-    if isinstance(config, dict):
-        config = ModelConfig(**{**config, "input_scale": tuple(config["input_scale"])})
-    net = Navigator(dataclasses.replace(config, precision="fp32"))
-    net.load_state_dict(obj.get("best_model") or obj["model"])
+    try:
+        if isinstance(config, dict):
+            config = ModelConfig(**{**config, "input_scale": tuple(config["input_scale"])})
+        net = Navigator(dataclasses.replace(config, precision="fp32"))
+    except (TypeError, KeyError, ValueError) as err:
+        raise CheckpointError(f"`checkpoint` {str(path)!r} holds an architecture this "
+                              f"version cannot build ({type(err).__name__}: {err})") from None
+    load_into(net, obj.get("best_model") or obj["model"], path)
     net.task = obj.get("task")
     net.world = checkpoint_world(obj)
     net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test",

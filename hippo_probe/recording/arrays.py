@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._angles import wrap_angle
-from .._validators import check_finite, check_option, check_shape
+from .._validators import check_finite, check_option, check_real, check_shape
 from ..errors import RecordingError
 from .layout import assemble, trial_blocks
 from .schema import annotate
@@ -17,7 +17,7 @@ LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 
 def check_time(time, name="time"):
     """Return ``time`` as a finite, strictly increasing float64 1-D array."""
-    time = np.asarray(time, dtype=float)
+    time = check_real(name, time).astype(float)
     if time.ndim != 1 or time.size == 0:
         raise ValueError(f"`{name}` must be a non-empty 1-D array of seconds; got shape "
                          f"{time.shape}")
@@ -90,11 +90,23 @@ def _unit_coords(unit, n_units):
         key = next((k for k in ("unit", "id") if k in columns), None)
         ids = columns.pop(key) if key else np.arange(n_units)
     else:
-        ids, columns = np.asarray(unit), {}
+        ids, columns = _unit_ids(unit), {}
     check_shape("unit", ids, (n_units,))
     for name, values in columns.items():
         check_shape(f"unit[{name!r}]", values, (n_units,))
     return ids, columns
+
+
+def _unit_ids(unit) -> np.ndarray:
+    """Unit ids as an array, refusing mixed or non-integer kinds (numpy would turn
+    ``[1, "a", 2.0]`` into the strings '1', 'a', '2.0' without a word)."""
+    items = unit.tolist() if isinstance(unit, np.ndarray) else list(unit)
+    kinds = {"integer" if isinstance(u, (int, np.integer)) and not isinstance(u, bool)
+             else "string" if isinstance(u, str) else type(u).__name__ for u in items}
+    if len(kinds) > 1 or not kinds <= {"integer", "string"}:
+        raise TypeError(f"`unit` ids must be all integers or all strings; got "
+                        f"{' and '.join(sorted(kinds))} ({_v(items[:5])[:80]})")
+    return np.asarray(items)
 
 
 def _text(values):
@@ -164,7 +176,7 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
     time = check_time(time)
     n = time.size
     scale = LENGTH_UNITS[check_option("position_units", position_units, LENGTH_UNITS)]
-    position = check_shape("position", np.asarray(position, dtype=float), (n, 2))
+    position = check_shape("position", check_real("position", position).astype(float), (n, 2))
     position = check_finite("position", position, allow_nan=True) * scale
 
     trial = np.zeros(n, dtype=int) if trial is None else np.asarray(trial)
@@ -208,7 +220,7 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
                             table["trial_stop"])
         attrs.setdefault("activity_kind", "spike_count")
     else:
-        activity = np.asarray(activity)
+        activity = check_real("activity", activity)
         if activity.ndim == 1:
             activity = activity[:, None]
         check_shape("activity", activity, (n, None))
@@ -227,8 +239,8 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
     rec["activity"] = ("time", "unit"), values
     rec["position"] = ("time", "space"), position
     if head_direction is not None:
-        head_direction = check_shape("head_direction",
-                                     np.asarray(head_direction, dtype=float), (n,))
+        head_direction = check_shape("head_direction", check_real(
+            "head_direction", head_direction).astype(float), (n,))
         check_finite("head_direction", head_direction, allow_nan=True)
         rec["head_direction"] = "time", wrap_angle(head_direction)
     return validate(annotate(rec))

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .._atomic import atomic_path
-from .._validators import check_option
+from .._validators import check_option, check_path
 from ..errors import RecordingError
 from .._angles import wrap_angle
 from .arrays import LENGTH_UNITS, bin_spikes, check_time
@@ -77,6 +77,27 @@ def _pick(found, name, what, path):
             return location, obj
     raise RecordingError(f"`{what.split()[0].lower()}` must name one of "
                          f"{[loc for loc, _ in found]}; got {name!r}")
+
+
+#: Plausibility rule for imported values (a garbled HDF5 block reads as numbers like
+#: 6e206): positions within 1 km of the origin (no lab arena comes close) and times
+#: within 1e7 s (116 days) of the session start, angles within 1e6 rad. Anything beyond
+#: is refused, named.
+MAX_POSITION_M = 1e3
+MAX_TIME_S = 1e7
+MAX_ANGLE_RAD = 1e6      # unwrapped angles may hold many turns; not 1e6 radians of them
+
+
+def _check_plausible(name, values, limit, unit, path):
+    values = np.asarray(values, dtype=float)
+    bad = np.abs(values) > limit
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise RecordingError(
+            f"`{name}` in {path} holds {int(bad.sum())} values beyond {limit:g} {unit} "
+            f"(first {float(values[idx]):g} at index {idx if len(idx) > 1 else idx[0]}): not a "
+            f"plausible {name}; the file may be damaged or its units wrong")
+    return values
 
 
 def _timestamps(series):
@@ -143,6 +164,8 @@ def _read_position(nwb, name, floor_axes, position_units, path):
         unit = "m"   # an empty or unknown unit field; values are then taken as metres
     xy = np.column_stack([columns[a] for a in floor_axes]) * LENGTH_UNITS[
         check_option("position_units", unit, LENGTH_UNITS)]
+    _check_plausible("position", xy, MAX_POSITION_M, "m", path)
+    _check_plausible("position timestamps", time, MAX_TIME_S, "s", path)
     return time, xy, {"nwb_position": location, "nwb_floor_axes": list(floor_axes),
                       "nwb_position_units": unit}
 
@@ -175,8 +198,10 @@ def _read_head_direction(nwb, name, floor_axes, sign, time, path):
         order = "".join(floor_axes) + "".join(vertical)
         sign = 1 if len(order) != 3 or order in ("xyz", "yzx", "zxy") else -1
     check_option("head_direction_sign", sign, (1, -1))
-    angle = _column(axes[key]) * scale * sign
-    hd_time = _timestamps(series)
+    angle = _check_plausible("head_direction", _column(axes[key]) * scale * sign,
+                             MAX_ANGLE_RAD, "rad", path)
+    hd_time = _check_plausible("head_direction timestamps", _timestamps(series), MAX_TIME_S,
+                               "s", path)
     if hd_time.size != time.size or not np.allclose(hd_time, time, atol=1e-9, rtol=0):
         # different clock: interpolate the unit vector, so wrap-around is handled
         angle = np.arctan2(np.interp(time, hd_time, np.sin(angle), left=np.nan, right=np.nan),
@@ -355,7 +380,9 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
     (15, 'adn')
     """
     pynwb = _nwb_classes()[0]
-    path = Path(path)
+    path = check_path("path", path)
+    if path.is_dir():
+        raise IsADirectoryError(f"`path` must be an NWB file; got the directory {path}")
     if not path.is_file():
         raise FileNotFoundError(f"`path` does not exist: {path}")
     check_option("trials", trials, ("auto", True, False))
@@ -580,7 +607,9 @@ def to_nwb(rec, path, overwrite=False):
     from pynwb.epoch import TimeIntervals
 
     validate(rec)
-    path = Path(path)
+    path = check_path("path", path)
+    if path.is_dir():
+        raise IsADirectoryError(f"`path` must name an .nwb file; got the directory {path}")
     if path.exists() and not overwrite:
         raise FileExistsError(f"`path` already exists: {path}; pass overwrite=True to "
                               "replace it")

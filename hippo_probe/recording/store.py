@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import os
+import functools
 import warnings
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 import zarr
+from dask.array.core import getter as dask_getter
 from zarr.codecs import BloscCodec, Crc32cCodec
 
 from .._atomic import OLD, atomic_path, remove_stale
+from .._validators import check_path
 from ..errors import RecordingError
 from .config import COMPLETE_MARKER, DEFAULTS
 from .layout import is_trial_aligned, trial_aligned_chunks, trial_blocks
@@ -26,7 +29,7 @@ def _is_url(path) -> bool:
 
 
 def _local(path) -> Path:
-    path = os.fspath(path)
+    path = str(check_path("path", path))
     return Path(path[len("file://"):] if path.startswith("file://") else path)
 
 
@@ -286,11 +289,35 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     return validate(rec)
 
 
+def _read_chunk(path, array, index, *args, **kwargs):
+    """dask's getter, with a failure (a chunk that fails its CRC32C checksum, a chunk file
+    gone since opening) raised as a RecordingError naming the variable and the store."""
+    try:
+        return dask_getter(array, index, *args, **kwargs)
+    except Exception as err:
+        inner = array
+        while getattr(inner, "array", None) is not None or getattr(inner, "_array", None) \
+                is not None:
+            inner = getattr(inner, "array", None) or getattr(inner, "_array")
+        name = str(getattr(inner, "name", "") or "?").lstrip("/")
+        raise RecordingError(f"`{name}` of the store {os.fspath(path)} could not be read at "
+                             f"{_slices(index)}: {type(err).__name__}: {err} (a damaged "
+                             f"chunk; re-copy or re-save the recording)") from err
+
+
+def _slices(index) -> str:
+    parts = [f"{s.start}:{s.stop}" if isinstance(s, slice) else str(s)
+             for s in (index if isinstance(index, tuple) else (index,))]
+    return "[" + ", ".join(parts) + "]"
+
+
 def _open(path, chunks, storage_options):
     with warnings.catch_warnings():
         # trial-aligned dask chunks may cut stored chunks; intended (see open_recording)
         warnings.filterwarnings("ignore", message="The specified chunks separate")
-        rec = xr.open_zarr(path, chunks=chunks, storage_options=storage_options, **_OPEN_KW)
+        rec = xr.open_zarr(path, chunks=chunks, storage_options=storage_options,
+                           from_array_kwargs={"getitem": functools.partial(_read_chunk, path)},
+                           **_OPEN_KW)
     rec.attrs.pop(COMPLETE_MARKER, None)
     return rec.assign_coords({name: coord.variable.load()
                               for name, coord in rec.coords.items()})

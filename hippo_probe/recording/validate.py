@@ -110,6 +110,23 @@ def _check_attrs(rec):
         _fail("source", f"(dataset attr) must be one of {SOURCES}; got {_v(rec.attrs['source'])}")
     if not rec.attrs["activity_kind"]:
         _fail("activity_kind", "(dataset attr) must be a non-empty string, e.g. 'spike_count'")
+    for name, value in rec.attrs.items():
+        if not _storable(value):
+            _fail(name, f"(dataset attr) must be a string, number, bool, None or a list or "
+                        f"array of them (attrs are stored as JSON); got "
+                        f"{type(value).__name__} {_v(value)[:60]}")
+
+
+def _storable(value) -> bool:
+    if value is None or isinstance(value, (str, bool, int, float, np.bool_, np.number)):
+        return True
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind in "biufUS"
+    if isinstance(value, (list, tuple)):
+        return all(_storable(v) for v in value)
+    if isinstance(value, dict):
+        return all(isinstance(k, str) and _storable(v) for k, v in value.items())
+    return False
     dt = rec.attrs["dt"]
     if not (np.isfinite(dt) and dt > 0):
         _fail("dt", f"(dataset attr) must be a finite number of seconds > 0; got {_v(dt)}")
@@ -153,6 +170,8 @@ def _check_variables(rec):
 
 def _check_time(rec):
     time = rec["time"].values
+    if time.size == 0:
+        _fail("time", "must hold at least one sample; got a recording of 0 samples")
     if not np.isfinite(time).all():
         _fail("time", f"must be finite; got {_v(time[_first_bad(~np.isfinite(time))])} at "
                       f"index {_first_bad(~np.isfinite(time))}")
@@ -235,6 +254,18 @@ def _check_environments(rec):
 
 
 def _check_values(rec, check_data):
+    if rec.sizes.get("unit", 0) == 0:
+        _fail("activity", "must have at least one unit; got 0 units")
+    counts = rec["activity"]
+    if rec.attrs["activity_kind"] == "spike_count" and (
+            check_data or (check_data is None and counts.chunks is None)):
+        values = np.asarray(counts.values)
+        bad = (values < 0) | (values != np.round(values))
+        if bad.any():
+            idx = tuple(int(i) for i in np.argwhere(bad)[0])
+            _fail("activity", f"holds spike counts (activity_kind 'spike_count'): they "
+                              f"must be whole numbers >= 0; got {_v(values[idx])} at index "
+                              f"{idx}")
     for name in _FINITE_CHECKS:
         if name not in rec.data_vars:
             continue

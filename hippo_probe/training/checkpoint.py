@@ -36,7 +36,8 @@ def content_digest(obj) -> str:
         if isinstance(value, torch.Tensor):
             t = value.detach().cpu().contiguous()
             h.update(f"T{t.dtype}{tuple(t.shape)}".encode())
-            h.update(t.view(torch.uint8).numpy().tobytes() if t.numel() else b"")
+            # flattened first: a 0-d tensor (Adam's step count) cannot be viewed as bytes
+            h.update(t.reshape(-1).view(torch.uint8).numpy().tobytes() if t.numel() else b"")
         elif isinstance(value, dict):
             h.update(b"D%d" % len(value))
             for key in sorted(value, key=repr):
@@ -89,6 +90,30 @@ def load(path) -> dict:
                               f"not match the sha256 written with it (a damaged copy?); "
                               f"use an intact copy or an earlier checkpoint")
     return obj
+
+
+def require(obj: dict, keys, path, purpose: str) -> dict:
+    """``obj`` if it holds every key in ``keys``; otherwise a CheckpointError saying which
+    are missing and what they were needed for."""
+    missing = [k for k in keys if k not in obj]
+    if missing:
+        raise CheckpointError(f"`checkpoint` {str(path)!r} lacks {missing}, needed to "
+                              f"{purpose} (is it a shipped network rather than a training "
+                              f"checkpoint, or from an older version?)")
+    return obj
+
+
+def load_into(module, state, path) -> None:
+    """``module.load_state_dict(state)`` (a network or an optimizer), as a CheckpointError
+    naming the file when the parameters do not fit (other shapes, missing keys)."""
+    try:
+        module.load_state_dict(state)
+    except (RuntimeError, KeyError, ValueError, TypeError) as err:
+        lines = [line.strip() for line in str(err).strip().splitlines() if line.strip()]
+        detail = "; ".join(lines[:3])[:400]
+        raise CheckpointError(f"`checkpoint` {str(path)!r} does not fit this "
+                              f"{type(module).__name__} ({type(err).__name__}: {detail})"
+                              ) from None
 
 
 def _safe_globals() -> list:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .._atomic import write_text
 from ..pretrained import HERE
-from .checkpoint import load, save_atomic
+from .checkpoint import load, require, save_atomic
 
 
 #: Names a shipped network may have: a plain file name, never a path or a hidden file.
@@ -38,7 +38,9 @@ def export_network(run_dir, name: str, dest=None) -> list:
     run_dir = Path(run_dir)
     dest = Path(dest or HERE)
     dest.mkdir(parents=True, exist_ok=True)
-    ckpt = load(run_dir / "checkpoint.pt")
+    ckpt = require(load(run_dir / "checkpoint.pt"),
+                   ("log", "step", "config", "model", "best_model", "best_loss",
+                    "model_config", "task"), run_dir / "checkpoint.pt", "export a network")
     log = dict(ckpt["log"])
     finished = ckpt["step"] >= ckpt["config"]["steps"] and "test" in log
     state = ckpt["best_model"] or ckpt["model"]

@@ -27,7 +27,7 @@ from .._version import __version__
 from ..model.config import ModelConfig, input_scale_for
 from ..model.navigator import Navigator
 from ..tasks import make_trials, task_config
-from .checkpoint import load, save_atomic
+from .checkpoint import load, load_into, require, save_atomic
 from .config import TrainConfig
 from .data import TrainingTrials
 from .memory import reuse_freed_memory
@@ -270,15 +270,16 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
            "validation": [], "wall_time_s": 0.0}
     step, best_loss, best_state = 0, math.inf, None
     if ckpt_path.exists():
-        ckpt = load(ckpt_path)
+        ckpt = require(load(ckpt_path), ("config", "model", "optimizer", "step", "best_loss",
+                                         "best_model", "log"), ckpt_path, "resume training")
         diff = TrainConfig.from_dict(ckpt["config"]).differences(config)
         if diff:
             listed = "; ".join(f"{k}: checkpoint {a!r}, got {b!r}" for k, a, b in
                                ((k, *v) for k, v in diff.items()))
             raise ValueError(f"`run_dir` {str(run_dir)!r} holds a checkpoint of another "
                              f"configuration ({listed}); use a new directory")
-        net.load_state_dict(ckpt["model"])
-        opt.load_state_dict(ckpt["optimizer"])
+        load_into(net, ckpt["model"], ckpt_path)
+        load_into(opt, ckpt["optimizer"], ckpt_path)
         step, best_loss, best_state = ckpt["step"], ckpt["best_loss"], ckpt["best_model"]
         log = ckpt["log"]
         log.setdefault("resumed_at", []).append(step)

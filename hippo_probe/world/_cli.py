@@ -18,15 +18,15 @@ def add_commands(sub):
 def _world_stats(args):
     import json
 
+    from .._atomic import save_figure, write_text
     from .stats import format_stats, plot_example_trials, world_stats
 
     stats = world_stats(n_trials=args.trials, split=args.split, seed=args.seed,
                         world=args.world)
     print(format_stats(stats))
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump(stats, f, indent=2)
+        write_text(args.json, json.dumps(stats, indent=2))
     if args.plot:
         fig = plot_example_trials(seed=args.seed, world=args.world)
-        fig.savefig(args.plot, dpi=120)
+        save_figure(fig, args.plot, dpi=120)
         print(f"saved {args.plot}")

@@ -68,8 +68,10 @@ def test_a_checkpoint_with_flipped_bytes_is_refused_not_resumed(tmp_path):
 
     path = tmp_path / "checkpoint.pt"
     save_atomic({"model": {"w": torch.randn(64, 64)}, "model_config": {"hidden": 8},
-                 "step": 10}, path)
-    assert load(path)["step"] == 10
+                 "step": 10, "optimizer": {"state": {0: {"step": torch.tensor(3.0),
+                                                         "mask": torch.ones(2).bool()}}}},
+                path)
+    assert load(path)["step"] == 10          # 0-d and bool tensors digest too
     with zipfile.ZipFile(path) as z:
         entry = next(i for i in z.infolist() if i.filename.endswith("/data/0"))
     raw = bytearray(path.read_bytes())

@@ -281,12 +281,13 @@ def test_export_refuses_a_name_that_is_not_a_plain_file_name(uninterrupted, tmp_
 def test_evaluate_refuses_no_trials_and_a_broken_network(uninterrupted, tmp_path, capsys):
     from hippo_probe.cli import main
     from hippo_probe.training import export_network
+    from hippo_probe.training.checkpoint import save_atomic
     d, _ = uninterrupted
     pt, _ = export_network(d / "run", "tiny_eval", dest=tmp_path)
     assert main(["evaluate", str(pt), "--trials", "0"]) == 2
     assert "`--trials` must be >= 1; got 0" in capsys.readouterr().err
     obj = torch.load(pt, weights_only=True)
     obj["model"] = {k: torch.full_like(v, float("nan")) for k, v in obj["model"].items()}
-    torch.save(obj, tmp_path / "nan.pt")
+    save_atomic(obj, tmp_path / "nan.pt")         # a NaN network, intact as a file
     assert main(["evaluate", str(tmp_path / "nan.pt"), "--trials", "2"]) == 2
     assert "non-finite results" in capsys.readouterr().err

@@ -19,7 +19,7 @@ export PIP_DISABLE_PIP_VERSION_CHECK=1
 # TORCH_INDEX_URL=https://download.pytorch.org/whl/cpu to take the CPU build instead.
 python -c "import torch, sys; sys.exit(0 if torch.__version__.startswith('2.13.0') else 1)" \
   2>/dev/null || pip install -q "torch==2.13.0" ${TORCH_INDEX_URL:+--index-url "$TORCH_INDEX_URL"}
-pip install -q -e ".[test,nwb,distributed]"
+pip install -q -e ".[model,test,nwb,distributed]"
 export MPLBACKEND=Agg
 
 if [ "$what" = test ]; then

@@ -50,6 +50,14 @@ def main(argv=None) -> int:
         # bad input: one clear line, no traceback
         print(f"hippo-probe {args.command}: error: {err}", file=sys.stderr)
         return 2
+    except ModuleNotFoundError as err:
+        from ._optional import EXTRAS, missing
+
+        if err.name not in EXTRAS:
+            raise
+        print(f"hippo-probe {args.command}: error: "
+              f"{missing(err.name, f'hippo-probe {args.command}')}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

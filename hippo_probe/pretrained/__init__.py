@@ -106,6 +106,12 @@ def load_pretrained(name: str, seed: int | None = None):
     """
     import dataclasses
 
+    try:
+        import torch  # noqa: F401
+    except ModuleNotFoundError:
+        from .._optional import missing
+        raise missing("torch", "load_pretrained") from None
+
     from ..model.config import ModelConfig
     from ..model.navigator import Navigator
     from ..training.checkpoint import load, load_into

@@ -319,8 +319,14 @@ def _open(path, chunks, storage_options):
                            from_array_kwargs={"getitem": functools.partial(_read_chunk, path)},
                            **_OPEN_KW)
     rec.attrs.pop(COMPLETE_MARKER, None)
-    return rec.assign_coords({name: coord.variable.load()
+    # string coords come back as numpy's StringDType; in memory (from_arrays, from_nwb,
+    # record) they are object arrays of str: one layout, so the same dtype
+    return rec.assign_coords({name: _object_strings(coord.variable.load())
                               for name, coord in rec.coords.items()})
+
+
+def _object_strings(var):
+    return var.astype(object) if var.dtype.kind in "TUS" else var
 
 
 def _trial_chunks(rec, config):

@@ -11,6 +11,26 @@ from ..world.config import FEATURES, WorldConfig
 PRECISIONS = ("fp32", "bf16")
 
 
+def native_bf16() -> bool:
+    """Whether this CPU computes bf16 matmuls in hardware (AVX512-BF16 or AMX).
+
+    Without them oneDNN emulates bf16 and the bf16 training step is far slower than
+    float32 (measured on an AMD EPYC without AVX-512: 37.7 s vs 1.84 s per step of batch
+    64 x 500 steps x 256 units, one thread).
+    """
+    import torch
+
+    return bool(torch.cpu._is_avx512_bf16_supported() or torch.cpu._is_amx_tile_supported())
+
+
+def resolve_precision(precision: str) -> str:
+    """``"auto"`` -> ``"bf16"`` where :func:`native_bf16`, else ``"fp32"``; others as given."""
+    check_option("precision", precision, ("auto", *PRECISIONS))
+    if precision == "auto":
+        return "bf16" if native_bf16() else "fp32"
+    return precision
+
+
 @dataclass(frozen=True)
 class ModelConfig:
     """Architecture of a :class:`~hippo_probe.model.Navigator`.

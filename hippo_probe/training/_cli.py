@@ -25,9 +25,10 @@ def add_commands(sub):
     p.add_argument("--test-trials", type=int, default=d.n_test)
     p.add_argument("--checkpoint-minutes", type=float, default=d.checkpoint_minutes)
     p.add_argument("--threads", type=int, default=d.threads)
-    p.add_argument("--precision", choices=PRECISIONS, default=d.precision,
-                   help="matmul precision of training (bf16: AMX matmuls, float32 state "
-                        f"and optimizer; default {d.precision})")
+    p.add_argument("--precision", choices=("auto", *PRECISIONS), default=d.precision,
+                   help="matmul precision of training: bf16 (AMX matmuls, float32 state "
+                        "and optimizer), fp32, or auto = bf16 where the CPU has bf16 "
+                        f"hardware, else fp32 (default {d.precision})")
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the task's splits")
     p.add_argument("--init-seed", type=int, default=d.init_seed)
     p.add_argument("--class-weight", type=float, default=None)

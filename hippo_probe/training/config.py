@@ -60,11 +60,16 @@ class TrainConfig:
     device : str
         "cpu" (default) or "cuda".
     precision : str
-        Matmul precision of training, "fp32" or "bf16": bf16 runs the LSTM's matmuls on
-        the CPU's AMX units (2-6x the float32 speed here) with cell state, gate math,
-        losses, gradient accumulation and Adam's parameters in float32. Validation, test
-        and the saved parameters are float32 either way. A checkpoint records it; a
-        resumed run must use the same. Default bf16: the same 1,000-step generalized run
+        Matmul precision of training, "auto" (default), "fp32" or "bf16": bf16 runs the
+        LSTM's matmuls on the CPU's AMX units (2-6x the float32 speed on a CPU that has
+        them) with cell state, gate math, losses, gradient accumulation and Adam's
+        parameters in float32. "auto" takes bf16 where the CPU computes it in hardware
+        (AVX512-BF16 or AMX) and fp32 elsewhere, where bf16 is emulated and ~20x slower
+        (:func:`hippo_probe.model.config.native_bf16`). Validation, test and the saved
+        parameters are float32 either way. The two differ only in rounding, so a run may
+        be resumed in the other precision (on another machine); the log lists the
+        precision of every stretch of steps (``precision_from_step``). On bf16 hardware,
+        bf16 is the better default: the same 1,000-step generalized run
         (darkness world) ended at validation error 0.159 m in bf16 and 0.151 m in fp32
         (5.4% apart; test 0.157 vs 0.152 m, 3.6%), while fp32 with another init seed
         ended at 0.157 m (3.9% from fp32, 1.4% from bf16): the gap is that between seeds,
@@ -91,10 +96,10 @@ class TrainConfig:
     init_from: str | None = None
     train_only: str | None = None
     device: str = "cpu"
-    precision: str = "bf16"
+    precision: str = "auto"
 
     #: fields that do not change the trained parameters (may differ on resume)
-    RESUMABLE_CHANGES = ("threads", "checkpoint_minutes", "n_test")
+    RESUMABLE_CHANGES = ("threads", "checkpoint_minutes", "n_test", "precision")
 
     def __post_init__(self):
         check_option("task", self.task, TASKS)
@@ -121,7 +126,7 @@ class TrainConfig:
                                  f"trained (its loss is the cross-entropy); got "
                                  f"{self.class_weight}")
         check_option("device", self.device, ("cpu", "cuda"))
-        check_option("precision", self.precision, PRECISIONS)
+        check_option("precision", self.precision, ("auto", *PRECISIONS))
 
     def differences(self, other: "TrainConfig") -> dict:
         """Fields that differ and matter for the result: name -> (self, other)."""

@@ -10,11 +10,13 @@ The squared error is averaged over the two coordinates. ``lambda`` is fixed for 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +26,7 @@ from tqdm.auto import tqdm
 
 from .._atomic import write_text
 from .._version import __version__
-from ..model.config import ModelConfig, input_scale_for
+from ..model.config import ModelConfig, input_scale_for, native_bf16, resolve_precision
 from ..model.navigator import Navigator
 from ..tasks import make_trials, task_config
 from .checkpoint import load, load_into, require, save_atomic
@@ -218,6 +220,12 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
         Stop (with a checkpoint) after this many optimizer steps of *this* call — to
         simulate an interruption in tests.
     """
+    precision = resolve_precision(config.precision)
+    if precision == "bf16" and config.device == "cpu" and not native_bf16():
+        warnings.warn("`precision` 'bf16' on a CPU without AVX512-BF16 or AMX: oneDNN "
+                      "emulates it, ~20x slower than fp32 here; use precision='auto'",
+                      RuntimeWarning, stacklevel=2)
+    config = dataclasses.replace(config, precision=precision)
     rank, world = _distributed(config.device)
     threads_before = torch.get_num_threads()
     torch.set_num_threads(config.threads)
@@ -283,6 +291,10 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
         step, best_loss, best_state = ckpt["step"], ckpt["best_loss"], ckpt["best_model"]
         log = ckpt["log"]
         log.setdefault("resumed_at", []).append(step)
+    segments = log.setdefault("precision_from_step",
+                              [[0, log["config"].get("precision", "fp32")]])
+    if segments[-1][1] != config.precision:
+        segments.append([step, config.precision])   # resumed on other hardware
 
     train_net = net
     if world > 1:

@@ -5,6 +5,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -106,17 +107,35 @@ def test_resumed_bf16_run_equals_an_uninterrupted_one(uninterrupted, uninterrupt
     assert net.lstm.precision == "fp32" and net.info["config"]["precision"] == "bf16"
 
 
-def test_resume_refuses_another_precision(uninterrupted, tmp_path):
+def test_a_run_resumed_in_another_precision_logs_each_stretch(uninterrupted, tmp_path):
+    """bf16 and fp32 differ only in rounding, so a run may move between machines with and
+    without bf16 units; the log says which precision made which steps."""
     d, _ = uninterrupted
-    with pytest.raises(ValueError, match=r"precision: checkpoint 'fp32', got 'bf16'"):
-        fit(TrainConfig(**{**TINY, "precision": "bf16"}), d / "run", cache_dir=d / "cache",
-            progress=False)
+    fit(TrainConfig(**TINY), tmp_path / "run", cache_dir=d / "cache", progress=False,
+        stop_after=3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)   # bf16 emulated on this CPU
+        log = fit(TrainConfig(**{**TINY, "precision": "bf16"}), tmp_path / "run",
+                  cache_dir=d / "cache", progress=False)
+    assert log["precision_from_step"] == [[0, "fp32"], [3, "bf16"]]
+    assert log["train"][-1]["step"] == TINY["steps"]
     # a checkpoint written before `precision` existed was trained in float32
     old = TrainConfig(**TINY).to_dict()
     del old["precision"]
     assert TrainConfig.from_dict(old).precision == "fp32"
     with pytest.raises(ValueError, match="`precision` must be one of"):
         TrainConfig(precision="fp16")
+
+
+def test_auto_precision_is_bf16_exactly_where_the_cpu_has_bf16_units(tmp_path):
+    from hippo_probe.model.config import native_bf16, resolve_precision
+
+    assert TrainConfig().precision == "auto"
+    assert resolve_precision("auto") == ("bf16" if native_bf16() else "fp32")
+    assert resolve_precision("fp32") == "fp32"
+    log = fit(TrainConfig(**{**TINY, "precision": "auto", "steps": 1}), tmp_path / "run",
+              cache_dir=tmp_path / "cache", progress=False)
+    assert log["config"]["precision"] == resolve_precision("auto")
 
 
 def test_train_command_takes_precision(uninterrupted, tmp_path):

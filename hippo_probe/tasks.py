@@ -272,10 +272,11 @@ class TrialBatch:
             raise ValueError(f"`config` is for task {config.name!r}; got a {self.task!r} "
                              f"batch")
         if config != own:
+            listed = "; ".join(f"{name}: given {a!r}, batch {b!r}"
+                               for name, (a, b) in _differing_fields(config, own).items())
             raise ValueError(
-                f"`config` disagrees with the configuration the batch was made with: given "
-                f"world {config.world.name!r} {config.world!r}; the batch's world "
-                f"{own.world.name!r} {own.world!r}. Leave `config` out to use the batch's.")
+                f"`config` disagrees with the configuration the batch was made with "
+                f"({listed}). Leave `config` out to use the batch's.")
         return config
 
     @property
@@ -512,6 +513,17 @@ def _clear_starts(vertices, candidates, clearance) -> np.ndarray:
     first = np.argmax(ok, axis=1)
     chosen = candidates[np.arange(len(candidates)), first]
     return np.where(ok.any(axis=1)[:, None], chosen, 0.0)
+
+
+def _differing_fields(a, b, prefix="") -> dict:
+    """Dotted field names where two (nested) dataclasses differ: name -> (a's, b's)."""
+    if not (hasattr(a, "__dataclass_fields__") and type(a) is type(b)):
+        return {prefix.rstrip("."): (a, b)} if a != b else {}
+    found = {}
+    for f in fields(a):
+        found.update(_differing_fields(getattr(a, f.name), getattr(b, f.name),
+                                       f"{prefix}{f.name}."))
+    return found
 
 
 # --------------------------------------------------------------------------- cache

@@ -188,13 +188,13 @@ def _lr_at(config: TrainConfig, step: int) -> float:
 
 def _distributed(device: str = "cpu"):
     """(rank, world_size), initialising the process group under torchrun."""
-    world = int(os.environ.get("WORLD_SIZE", "1"))
-    if world <= 1:
+    world_size = int(os.environ.get("WORLD_SIZE", "1"))
+    if world_size <= 1:
         return 0, 1
     import torch.distributed as dist
     if not dist.is_initialized():
         dist.init_process_group("nccl" if device == "cuda" else "gloo")
-    return dist.get_rank(), world
+    return dist.get_rank(), world_size
 
 
 def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
@@ -226,7 +226,7 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
                       "emulates it, ~20x slower than fp32 here; use precision='auto'",
                       RuntimeWarning, stacklevel=2)
     config = dataclasses.replace(config, precision=precision)
-    rank, world = _distributed(config.device)
+    rank, world_size = _distributed(config.device)
     threads_before = torch.get_num_threads()
     torch.set_num_threads(config.threads)
     try:
@@ -236,17 +236,17 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
         pass
     reuse_freed_memory()    # each step's activations, reused instead of page-faulted anew
     try:
-        return _fit(config, Path(run_dir), rank, world, progress, cache_dir, stop_after)
+        return _fit(config, Path(run_dir), rank, world_size, progress, cache_dir, stop_after)
     finally:
         torch.set_num_threads(threads_before)   # don't leave a Jupyter kernel pinned
 
 
-def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
+def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
     run_dir.mkdir(parents=True, exist_ok=True)
     task = task_config(config.task, config.world)
     n_trials = config.n_trials or task.train_trials
-    if config.batch_size % world:
-        raise ValueError(f"`batch_size` must be divisible by the world size ({world}); "
+    if config.batch_size % world_size:
+        raise ValueError(f"`batch_size` must be divisible by the world size ({world_size}); "
                          f"got {config.batch_size}")
     device = torch.device(config.device)
     net = build_network(config).to(device)
@@ -274,7 +274,7 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
            "model_config": _plain(net.config),
            "base_network": net.base_network,
            "package_version": __version__, "torch_version": str(torch.__version__),
-           "command": _command_line(), "world_size": world, "train": [],
+           "command": _command_line(), "world_size": world_size, "train": [],
            "validation": [], "wall_time_s": 0.0}
     step, best_loss, best_state = 0, math.inf, None
     if ckpt_path.exists():
@@ -297,7 +297,7 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
         segments.append([step, config.precision])   # resumed on other hardware
 
     train_net = net
-    if world > 1:
+    if world_size > 1:
         train_net = torch.nn.parallel.DistributedDataParallel(net)
     data = TrainingTrials(config.task, n_trials, config.batch_size, world=config.world,
                           seed=config.seed,
@@ -339,7 +339,7 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
                 if rank == 0:
                     last_val = validate()
             idx = data.indices(step)
-            per_rank = config.batch_size // world
+            per_rank = config.batch_size // world_size
             idx = idx[rank * per_rank:(rank + 1) * per_rank]
             inputs, target, env = data.batch(idx)
             for group in opt.param_groups:
@@ -353,9 +353,9 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
             step += 1
             done_here += 1
             values = torch.stack([total.detach(), mse.detach(), ce.detach()])
-            if world > 1:             # log the global batch's loss, not rank 0's half
+            if world_size > 1:             # log the global batch's loss, not rank 0's half
                 torch.distributed.all_reduce(values)
-                values /= world
+                values /= world_size
             log["wall_time_s"] = wall0 + time.time() - t_start
             loss_v, mse_v, ce_v = values.tolist()
             log["train"].append({"step": step, "loss": loss_v, "mse": mse_v, "ce": ce_v,
@@ -394,7 +394,7 @@ def _fit(config, run_dir, rank, world, progress, cache_dir, stop_after):
         checkpoint(last_state)        # the checkpoint keeps the last parameters
         save_network(net, config, log, run_dir / "network.pt")
         write_text(run_dir / "log.json", json.dumps(log, indent=1), what="out")
-    if world > 1:
+    if world_size > 1:
         torch.distributed.barrier()
     return log
 

@@ -34,6 +34,9 @@ _LAZY_ATTRS = {
     "from_nwb": "hippo_probe.recording",
     "to_nwb": "hippo_probe.recording",
     "select_trials": "hippo_probe.recording",
+    # pynapple bridge (issue 16; pynapple is imported when called)
+    "to_pynapple": "hippo_probe.recording",
+    "from_pynapple": "hippo_probe.recording",
     # analyses (no torch)
     "ratemaps": "hippo_probe.analysis",
     "spatial_information": "hippo_probe.analysis",
@@ -47,6 +50,14 @@ _LAZY_ATTRS = {
     "localization_error": "hippo_probe.analysis",
     "classification_accuracy": "hippo_probe.analysis",
     "AnalysisWarning": "hippo_probe.analysis",
+    # cell classes (issue 17)
+    "place_fields": "hippo_probe.analysis",
+    "spatial_autocorrelation": "hippo_probe.analysis",
+    "grid_score": "hippo_probe.analysis",
+    "border_score": "hippo_probe.analysis",
+    "speed_score": "hippo_probe.analysis",
+    "conjunctive_tuning": "hippo_probe.analysis",
+    "classify_cells": "hippo_probe.analysis",
     # torch-backed
     # from its own module: importing the submodule hippo_probe.model.record (as the
     # `record` command does) rebinds the package attribute `record` to the module
@@ -64,12 +75,19 @@ __all__ = sorted(
 
 
 def __getattr__(name: str):
-    if name in _SUBMODULES:
-        module = importlib.import_module(f"hippo_probe.{name}")
-    elif name in _LAZY_ATTRS:
-        module = getattr(importlib.import_module(_LAZY_ATTRS[name]), name)
-    else:
+    if name not in _SUBMODULES and name not in _LAZY_ATTRS:
         raise AttributeError(f"module 'hippo_probe' has no attribute {name!r}")
+    try:
+        if name in _SUBMODULES:
+            module = importlib.import_module(f"hippo_probe.{name}")
+        else:
+            module = getattr(importlib.import_module(_LAZY_ATTRS[name]), name)
+    except ModuleNotFoundError as err:
+        from ._optional import EXTRAS, missing
+
+        if err.name in EXTRAS:
+            raise missing(err.name, f"hippo_probe.{name}") from None
+        raise
     globals()[name] = module  # cache: later look-ups skip __getattr__
     return module
 

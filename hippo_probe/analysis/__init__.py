@@ -20,6 +20,14 @@ from .remapping_similarity import remapping_similarity
 from .spatial_information import spatial_information
 from .spatial_selectivity import spatial_selectivity
 
+# cell classes (issue 17): place fields, grid, border, speed, conjunctive, classification
+from .border_score import border_score
+from .classify_cells import classify_cells
+from .conjunctive_tuning import conjunctive_tuning
+from .grid_score import grid_score, spatial_autocorrelation
+from .place_fields import place_fields
+from .speed_score import speed_score
+
 __all__ = [
     "AnalysisWarning",
     "classification_accuracy",
@@ -33,4 +41,11 @@ __all__ = [
     "remapping_similarity",
     "spatial_information",
     "spatial_selectivity",
+    "place_fields",
+    "spatial_autocorrelation",
+    "grid_score",
+    "border_score",
+    "speed_score",
+    "conjunctive_tuning",
+    "classify_cells",
 ]

@@ -261,9 +261,8 @@ class PlaceFieldConfig:
     threshold : float
         A field is a contiguous set of bins whose rate exceeds 20% of the map's range above
         its minimum, ``min + 0.2 (peak - min)``; for spike maps (minimum about 0) this is
-        the customary 20% of the peak rate (e.g. Leutgeb et al. 2007, Science 315:961;
-        Langston et al. 2010). The range, not the peak alone, makes the rule
-        offset-invariant, so it applies to the LSTM's signed h.
+        the customary 20% of the peak rate of the place-cell literature. The range, not the
+        peak alone, makes the rule offset-invariant, so it applies to the LSTM's signed h.
     min_bins : int
         Fields of fewer than 9 bins are noise (opexebo's and the BNT's
         ``firing_field_min_bins``).

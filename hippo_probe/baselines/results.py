@@ -29,6 +29,7 @@ variable                   dims                                meaning
 ``heading_drift``          (trial_id, trial_time)              true heading drift (rad)
 ``estimate_drift_pf``,     (trial_id, trial_time)              the PF's posterior mean
 ``pf_drift_sd``                                                and s.d. of the drift
+``estimate_drift_pfslam``  (trial_id, trial_time)              PF-SLAM's drift (mean)
 ``start_position``         (trial_id, space)                   start, arena frame
 ``trial_environment``      (trial_id)                          arena id of each trial
 =========================  ==================================  =======================
@@ -162,6 +163,10 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
     data["pf_drift_sd"] = (time_dims, trial_major(parts["pf"], "drift_sd"),
                            {"units": "rad", "long_name": "particle filter heading drift, "
                                                          "posterior s.d."})
+    if "pfslam" in parts:
+        data["estimate_drift_pfslam"] = (
+            time_dims, trial_major(parts["pfslam"], "drift_mean"),
+            {"units": "rad", "long_name": "PF-SLAM heading drift, posterior mean"})
     coords = {
         "trial_id": ("trial_id", np.asarray(batch.trial_index, dtype=np.int64),
                      {"long_name": "trial index within the split"}),

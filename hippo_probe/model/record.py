@@ -23,6 +23,7 @@ BASELINE_VARIABLES = {
     "estimate_pfslam": ("time", "space"), "pf_cov": ("time", "cov"),
     "class_probability_pfslam": ("time", "environment_id"),
     "estimate_drift_pf": ("time",), "pf_drift_sd": ("time",),
+    "estimate_drift_pfslam": ("time",),
 }
 
 

@@ -109,6 +109,7 @@ VARIABLES: dict[str, VariableSpec] = {
     "estimate_drift_pf": VariableSpec(("time",), "rad",
                                       "particle filter heading drift estimate"),
     "pf_drift_sd": VariableSpec(("time",), "rad", "particle filter heading drift s.d."),
+    "estimate_drift_pfslam": VariableSpec(("time",), "rad", "PF-SLAM heading drift estimate"),
     # estimates (network and baselines), arena frame
     "estimate": VariableSpec(("time", "space"), "m", "network position estimate"),
     "estimate_pi": VariableSpec(("time", "space"), "m", "path integration estimate"),

@@ -66,6 +66,11 @@ def test_specialized_has_class_posteriors():
     assert prob.dims == ("trial_id", "trial_time", "environment_id")
     assert prob.sizes["environment_id"] == 100
     assert np.allclose(prob.sum("environment_id"), 1.0, atol=1e-5)
+    # PF-SLAM tracks the heading drift too, and its estimate is kept (darkness world)
+    drift = ds["estimate_drift_pfslam"]
+    assert drift.dims == ("trial_id", "trial_time") and drift.attrs["units"] == "rad"
+    truth = ds["heading_drift"]
+    assert float(abs(drift - truth).mean()) < float(abs(truth).mean()) + 0.05
 
 
 def test_cli(tmp_path, capsys):

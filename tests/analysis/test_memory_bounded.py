@@ -1,0 +1,57 @@
+"""Lazy analyses hold chunks, not the recording: the peak memory of rate maps and spatial
+information on a store opened with open_recording grows far less than the activity read."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+CHILD = """
+import json, sys
+def hwm():
+    return int(next(l for l in open("/proc/self/status") if l.startswith("VmHWM")).split()[1])
+import hippo_probe as hp
+rec = hp.open_recording(sys.argv[1])
+before = hwm()
+hp.ratemaps(rec, bin_size=0.05, sigma=0)
+hp.spatial_information(rec, bin_size=0.05)
+print(json.dumps({"before_kib": before, "peak_kib": hwm()}))
+"""
+
+
+def _store(path, n, units):
+    import dask.array as da
+
+    from hippo_probe.recording import annotate, from_arrays, save_recording
+
+    trial = np.arange(n) // 2500                   # 50 s trials, as many as fit
+    time = np.arange(n) * 0.02 + trial * 0.04
+    xy = np.random.default_rng(0).uniform(-0.5, 0.5, (n, 2))
+    rec = from_arrays(time, xy, activity=np.zeros((n, 1), np.float32), trial=trial)
+    rec = rec.drop_vars("activity").drop_dims("unit").assign_coords(unit=np.arange(units))
+    rec["activity"] = ("time", "unit"), da.random.default_rng(0).random(
+        (n, units), chunks=(2500, units)).astype(np.float32)
+    save_recording(annotate(rec), path)
+    return path
+
+
+def _peak_growth_kib(path):
+    done = subprocess.run([sys.executable, "-c", CHILD, str(path)], capture_output=True,
+                          text=True, check=True, env={"OMP_NUM_THREADS": "1",
+                                                      "PATH": "/usr/bin:/bin"})
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    return out["peak_kib"] - out["before_kib"]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc VmHWM")
+def test_peak_memory_does_not_follow_the_recording_length(tmp_path):
+    """4x the samples (same chunks, 4x as many): the peak may grow by the per-sample
+    vectors the analyses keep in memory (time, trial coords, positions, bins: ~100 B a
+    sample), not by the activity (1 KiB a sample at 256 float32 units)."""
+    short, long = 50_000, 200_000
+    grow_short = _peak_growth_kib(_store(tmp_path / "short.zarr", short, 256))
+    grow_long = _peak_growth_kib(_store(tmp_path / "long.zarr", long, 256))
+    extra_activity_kib = (long - short) * 256 * 4 / 1024          # 146 MiB more to read
+    assert grow_long - grow_short < 0.25 * extra_activity_kib, (grow_short, grow_long)

@@ -3,24 +3,34 @@
 import time
 from pathlib import Path
 
+from .cli import check_output, one_of
+
 ROOT = Path(__file__).resolve().parents[1]
 FIGURES = ("fig2", "fig3", "fig4", "fig5")
 
 
 def add_commands(sub):
+    sizes = ("tiny", "full", "paper")
+    size_help = ("data size: full, 200 test trials, about 2 minutes from scratch on 2 cores; "
+                 "paper, the study's scale: 1,000 test trials and PF-SLAM on 100 (about 4 "
+                 "minutes); tiny, a smoke test")
     p = sub.add_parser("main", help="the README's main job: world statistics and every "
                                     "paper figure, into one folder")
-    p.add_argument("--out", default="figures", help="output folder (default: figures/)")
-    p.add_argument("--size", default="paper", choices=["tiny", "full", "paper"],
-                   help="default paper: the study's scale (1,000 test trials)")
+    p.add_argument("--out", default="figures", metavar="FOLDER",
+                   help="folder of the figures and their numbers")
+    p.add_argument("--size", default="paper", choices=sizes, type=one_of("size", sizes),
+                   help=size_help)
+    p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(run=_main)
     f = sub.add_parser("figures", help="regenerate the paper figures and RESULTS.md")
-    f.add_argument("--out", default="figures")
-    f.add_argument("--size", default="full", choices=["tiny", "full", "paper"],
-                   help="full: 200 test trials, about 2 minutes from scratch on 2 cores; "
-                        "paper: the study's scale, 1,000 test trials and PF-SLAM on 100 "
-                        "(about 4 minutes); tiny: a smoke test")
-    f.add_argument("--only", nargs="*", choices=FIGURES, default=None)
+    f.add_argument("--out", default="figures", metavar="FOLDER",
+                   help="folder of the figures and their numbers")
+    f.add_argument("--size", default="full", choices=sizes, type=one_of("size", sizes),
+                   help=size_help)
+    f.add_argument("--only", nargs="*", choices=FIGURES, default=None, metavar="FIG",
+                   type=one_of("only", FIGURES),
+                   help=f"make only these figures, of {', '.join(FIGURES)} (default: all)")
+    f.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     f.set_defaults(run=_figures)
 
 
@@ -40,15 +50,20 @@ def _load(name):
 
 
 def _figures(args):
+    from tqdm.auto import tqdm
+
+    out = check_output("--out", args.out, kind="folder")
     common = _load("_common")
     cfg = common.CONFIGS[args.size]
-    out = Path(args.out)
     t_all = time.time()
-    for name in args.only or FIGURES:
-        t0 = time.time()
-        print(f"== {name} ({args.size}) ==")
-        _load(name).make(cfg, out)
-        print(f"   {name} done in {time.time() - t0:.0f} s")
+    names = args.only or FIGURES
+    with tqdm(names, desc="figures", unit="figure", disable=args.no_progress) as bar:
+        for name in bar:
+            t0 = time.time()
+            bar.set_postfix_str(name)
+            tqdm.write(f"== {name} ({args.size}) ==")
+            _load(name).make(cfg, out)
+            tqdm.write(f"   {name} done in {time.time() - t0:.0f} s")
     results = _load("results")
     import sys
     argv = sys.argv
@@ -90,11 +105,12 @@ def _main(args):
     from ._atomic import save_figure
     from .world.stats import format_stats, plot_example_trials, world_stats
 
-    out = Path(args.out)
+    out = check_output("--out", args.out, kind="folder")
     out.mkdir(parents=True, exist_ok=True)
     print("== World statistics (500 test trials per task) ==")
     print(format_stats(world_stats(n_trials=500)))
     fig = plot_example_trials()
     save_figure(fig, out / "example_trials.png", dpi=120)
     print(f"saved {out / 'example_trials.png'}")
-    _figures(args.__class__(out=args.out, size=args.size, only=None))
+    _figures(args.__class__(out=args.out, size=args.size, only=None,
+                            no_progress=args.no_progress))

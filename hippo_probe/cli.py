@@ -3,13 +3,20 @@
 Each subsystem contributes its subcommands from a small ``_cli`` module (argument parsing
 only; the heavy imports happen when a command runs), so ``hippo-probe --help`` is fast and
 never imports torch.
+
+The helpers here give every subcommand one voice: :class:`Parser` (each option's default
+shown in ``--help``, usage errors in one line), :func:`one_of` (an option restricted to a
+few names, refused with the package's validator message) and :func:`check_output` (an
+output path refused before the work starts, naming the flag).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+from pathlib import Path
 
 # modules that define ``add_commands(subparsers)``; in the order shown by --help
 _COMMAND_MODULES = (
@@ -22,8 +29,94 @@ _COMMAND_MODULES = (
 )
 
 
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """``--help`` with each option's default after its text, "(default: 0)".
+
+    An option whose default is None says in its own text what happens without it
+    ("default: the network's own"), which reads better than "(default: None)".
+    """
+
+    def _get_help_string(self, action):
+        if action.default is None:
+            return action.help
+        return super()._get_help_string(action)
+
+
+class Parser(argparse.ArgumentParser):
+    """The parser of ``hippo-probe`` and of every subcommand (``add_subparsers`` makes its
+    subparsers of the same class): :class:`HelpFormatter`, and a usage error is one line,
+    like the errors of the commands themselves."""
+
+    def __init__(self, *args, formatter_class=HelpFormatter, **kwargs):
+        super().__init__(*args, formatter_class=formatter_class, **kwargs)
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+
+
+def one_of(name: str, allowed):
+    """``type=`` of an option restricted to ``allowed`` (give ``choices=allowed`` too, for
+    the help): another value is refused with the package's message, "argument --task:
+    `task` must be one of 'localization', ...; got 'maze'"."""
+    from ._validators import check_option
+
+    allowed = tuple(allowed)
+
+    def parse(text):
+        try:
+            return check_option(name, text, allowed)
+        except ValueError as err:
+            raise argparse.ArgumentTypeError(str(err)) from None
+
+    parse.__name__ = name
+    return parse
+
+
+def check_output(flag: str, path, *, kind: str = "store", overwrite: bool = False) -> Path:
+    """Refuse, before any work starts, an output path the command could not write at its
+    end; the message names the command-line ``flag``.
+
+    Parameters
+    ----------
+    flag : str
+        The option as typed, e.g. ``"--out"`` (or a positional's metavar, ``"DEST"``).
+    path : str or os.PathLike
+    kind : {"store", "file", "folder"}
+        ``"store"``: a zarr store, refused if it exists unless ``overwrite`` (pass
+        --overwrite); ``"file"``: a file replaced freely (a figure), refused if it is an
+        existing folder; ``"folder"``: a folder written into, refused if it is a file.
+    overwrite : bool
+        The command's --overwrite (stores only).
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    FileExistsError, IsADirectoryError, NotADirectoryError, PermissionError
+    """
+    path = Path(path)
+    if kind == "store" and (path.exists() or path.is_symlink()) and not overwrite:
+        raise FileExistsError(f"{flag} {path} already exists; pass --overwrite to replace it")
+    if kind == "file" and path.is_dir():
+        raise IsADirectoryError(f"{flag} {path} is a folder; give a file name (e.g. "
+                                f"{path / 'errors.png'})")
+    if kind == "folder" and path.exists() and not path.is_dir():
+        raise NotADirectoryError(f"{flag} {path} is a file; give a folder")
+    # the nearest existing folder above it is where the output (or its folders) is made
+    for parent in path.absolute().parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise NotADirectoryError(f"{flag} {path}: {parent} is a file, not a folder")
+            if not os.access(parent, os.W_OK | os.X_OK):
+                raise PermissionError(f"{flag} {path}: no permission to write in {parent}")
+            break
+    return path
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="hippo-probe",
         description="Recurrent networks that navigate like rats, recorded like real cells.")
     from ._version import __version__
@@ -41,8 +134,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    """Run ``hippo-probe argv``; returns the exit status: 0, or 2 after one line on stderr
+    for a usage error or bad input (``--help`` and ``--version`` return 0)."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as done:   # --help, --version, or a usage error (already one line)
+        return int(done.code or 0)
     try:
         return int(args.run(args) or 0)
     except (ValueError, FileNotFoundError, FileExistsError, IsADirectoryError,

@@ -1,52 +1,66 @@
 """``hippo-probe baselines``."""
 
+from ..cli import check_output, one_of
+from ..tasks import SPLITS, TASKS
+from ..world.config import WORLDS
+
 
 def add_commands(sub):
+    from .config import BaselineConfig
+
+    d = BaselineConfig()
     p = sub.add_parser(
         "baselines",
         help="run PI, SH, NB, the particle filter (and PF-SLAM) on a task's trials")
-    p.add_argument("--task", required=True,
-                   help="localization, generalized or specialized")
-    p.add_argument("--world", default="darkness",
-                   help="the world of the trials: darkness (the default, the study's) or compass")
-    p.add_argument("--split", default="test", help="train, validation or test (default test)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the split (default 0)")
-    p.add_argument("--out", required=True, metavar="FILE",
+    p.add_argument("--task", required=True, choices=TASKS, type=one_of("task", TASKS),
+                   help="task whose trials to run (PF-SLAM on the specialized task only)")
+    p.add_argument("--world", default="darkness", choices=WORLDS,
+                   type=one_of("world", WORLDS),
+                   help="world of the trials: darkness (the study's: the sensed heading "
+                        "drifts) or compass (no drift)")
+    p.add_argument("--split", default="test", choices=SPLITS, type=one_of("split", SPLITS),
+                   help="split of the trials")
+    p.add_argument("--seed", type=int, default=0, help="seed of the split")
+    p.add_argument("--out", required=True, metavar="STORE",
                    help="zarr store to write (estimates in the arena frame, PF covariances, "
                         "PF-SLAM class posteriors; layout: hippo_probe.baselines.results)")
     p.add_argument("--plot", default=None, metavar="PNG",
-                   help="also save the localization error vs time of every baseline here")
-    p.add_argument("--trials", type=int, default=None,
+                   help="also save the localization error (m) vs time of every baseline "
+                        "here (default: no plot)")
+    p.add_argument("--trials", type=int, default=None, metavar="N",
                    help="number of trials (default: the whole split)")
-    p.add_argument("--first", type=int, default=0, help="index of the first trial (default 0)")
-    p.add_argument("--particles", type=int, default=None,
-                   help="particles of the oracular PF per trial (default 1000 with a known "
-                        "start, 2000 with an unknown one)")
-    p.add_argument("--slam-particles", type=int, default=None,
-                   help="particles of PF-SLAM per trial, specialized task (default 10000)")
-    p.add_argument("--prior-trials", type=int, default=None,
-                   help="training trials of the naive-Bayes prior (default 2000)")
-    p.add_argument("--threads", type=int, default=None,
-                   help="threads of the particle filters (default: all cores)")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing FILE")
+    p.add_argument("--first", type=int, default=0, metavar="INDEX",
+                   help="index of the first trial in the split")
+    p.add_argument("--particles", type=int, default=None, metavar="N",
+                   help=f"particles of the oracular particle filter per trial (default: "
+                        f"{d.particle_filter.n_particles} with a known start, "
+                        f"{d.particle_filter.unknown_start_particles} with an unknown one)")
+    p.add_argument("--slam-particles", type=int, default=None, metavar="N",
+                   help=f"particles of PF-SLAM per trial, specialized task (default: "
+                        f"{d.particle_filter.slam_particles})")
+    p.add_argument("--prior-trials", type=int, default=None, metavar="N",
+                   help=f"training trials behind the naive-Bayes prior over positions "
+                        f"(default: {d.naive_bayes.prior_trials})")
+    p.add_argument("--threads", type=int, default=None, metavar="N",
+                   help="CPU threads of the particle filters (default: all cores)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(run=_baselines)
 
 
 def _baselines(args):
+    # refuse the outputs before making a single trial (the run takes minutes)
+    out = check_output("--out", args.out, overwrite=args.overwrite)
+    if args.plot:
+        check_output("--plot", args.plot, kind="file")
+
     import time
-    from pathlib import Path
 
     from .._atomic import save_figure
-    from .._validators import check_option
-    from ..tasks import SPLITS, TASKS, make_trials, task_config
+    from ..tasks import make_trials, task_config
     from .config import BaselineConfig, NaiveBayesConfig
     from .results import error_table, plot_errors, run_baselines, save_baselines
 
-    check_option("task", args.task, TASKS)
-    check_option("split", args.split, SPLITS)
-    out = Path(args.out)
-    if out.exists() and not args.overwrite:
-        raise FileExistsError(f"`--out` {str(out)!r} exists; pass --overwrite to replace it")
     n_trials = args.trials if args.trials is not None else \
         task_config(args.task, args.world).split_size(args.split)
     began = time.perf_counter()
@@ -55,7 +69,8 @@ def _baselines(args):
     baseline = BaselineConfig() if args.prior_trials is None else \
         BaselineConfig(naive_bayes=NaiveBayesConfig(prior_trials=args.prior_trials))
     ds = run_baselines(batch, n_particles=args.particles, slam_particles=args.slam_particles,
-                       threads=args.threads, progress=True, baseline=baseline)
+                       threads=args.threads, progress=not args.no_progress,
+                       baseline=baseline)
     save_baselines(ds, out, overwrite=args.overwrite)
     print(error_table(ds))
     print(f"saved {out} ({time.perf_counter() - began:.0f} s)")

@@ -1,49 +1,63 @@
 """``hippo-probe record`` and ``hippo-probe export-network``."""
 
-from pathlib import Path
-
+from ..cli import check_output, one_of
 from ..tasks import SPLITS, TASKS
+from ..world.config import WORLDS, MotionConfig
 
 
 def add_commands(sub):
+    motion = MotionConfig()
     p = sub.add_parser("record", help="record a network's hidden units on a split "
                                       "(a recording, schema v1, as zarr)")
     p.add_argument("--network", required=True,
                    help="pretrained name (e.g. generalized, generalized_compass; see "
                         "hippo_probe.pretrained) or a .pt file")
-    p.add_argument("--split", default="test", choices=SPLITS,
-                   help="split of the trials (default test)")
-    p.add_argument("--task", default=None, choices=TASKS,
+    p.add_argument("--split", default="test", choices=SPLITS, type=one_of("split", SPLITS),
+                   help="split of the trials")
+    p.add_argument("--task", default=None, choices=TASKS, type=one_of("task", TASKS),
                    help="task whose trials to run (default: the network's own)")
-    p.add_argument("--world", default=None,
-                   help="world of the trials, darkness or compass (default: the network's own)")
-    p.add_argument("--trials", type=int, default=1000, help="number of trials (default 1000)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the split (default 0)")
+    p.add_argument("--world", default=None, choices=WORLDS, type=one_of("world", WORLDS),
+                   help="world of the trials (default: the network's own)")
+    p.add_argument("--trials", type=int, default=1000, metavar="N",
+                   help=f"number of trials (each {motion.n_steps} steps of "
+                        f"{motion.network_dt:g} s: {motion.n_steps * motion.network_dt:g} s)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the split")
     p.add_argument("--baselines", default=None, metavar="FILE",
-                   help="add the estimates of a `hippo-probe baselines` output file")
-    p.add_argument("--out", required=True, help="destination zarr store")
-    p.add_argument("--overwrite", action="store_true")
+                   help="add the estimates of a `hippo-probe baselines` output store (made "
+                        "on the same task, world, split and seed; default: none)")
+    p.add_argument("--out", required=True, metavar="STORE",
+                   help="destination zarr store (e.g. recordings/NAME.zarr)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(run=_record)
 
     e = sub.add_parser("export-network", help="ship a run's best network as pretrained "
                                               "(network .pt + training log .json)")
-    e.add_argument("run_dir")
-    e.add_argument("name", help="e.g. generalized")
-    e.add_argument("--dest", default=None, help="folder (default: hippo_probe/pretrained)")
+    e.add_argument("run_dir", metavar="RUN_DIR",
+                   help="run directory of `hippo-probe train` (holds network.pt and log.json)")
+    e.add_argument("name", metavar="NAME",
+                   help="pretrained name to ship it under (e.g. generalized)")
+    e.add_argument("--dest", default=None, metavar="FOLDER",
+                   help="folder to write into (default: hippo_probe/pretrained)")
     e.set_defaults(run=_export)
 
 
 def _record(a):
+    from pathlib import Path
+
+    from .._validators import check_positive
+
+    # refuse bad arguments before loading torch and making the trials
+    check_positive("--trials", a.trials, integer=True)
+    check_output("--out", a.out, overwrite=a.overwrite)
+    if a.baselines and not Path(a.baselines).exists():
+        raise FileNotFoundError(f"--baselines {a.baselines} does not exist")
+
     from ..pretrained import load_pretrained
     from ..recording import save_recording
     from ..tasks import make_trials
     from .record import record
 
-    from .._validators import check_positive
-
-    check_positive("--trials", a.trials, integer=True)
-    if (Path(a.out).exists() or Path(a.out).is_symlink()) and not a.overwrite:
-        raise FileExistsError(f"--out {a.out} already exists; pass --overwrite to replace it")
     net = load_pretrained(a.network)
     task = a.task or net.task
     batch = make_trials(task, a.trials, a.split, a.seed, world=a.world or net.world)
@@ -52,7 +66,8 @@ def _record(a):
         from ..baselines.results import open_baselines
         from .record import baselines_from_dataset
         baselines = baselines_from_dataset(open_baselines(a.baselines), batch)
-    rec = record(net, batch, baselines=baselines, checkpoint=str(a.network))
+    rec = record(net, batch, baselines=baselines, checkpoint=str(a.network),
+                 progress=not a.no_progress)
     save_recording(rec, a.out, overwrite=a.overwrite)
     print(f"saved {a.out}: {rec.sizes['time']} samples x {rec.sizes['unit']} units")
 

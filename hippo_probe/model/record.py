@@ -59,23 +59,33 @@ def baselines_from_dataset(ds, batch) -> dict:
 
 
 @torch.no_grad()
-def run_network(network, batch, chunk: int = 250):
-    """(h (T,B,H) float32, xy (T,B,2), probabilities (T,B,C) or None) on a TrialBatch."""
+def run_network(network, batch, chunk: int = 250, *, progress: bool = False):
+    """(h (T,B,H) float32, xy (T,B,2), probabilities (T,B,C) or None) on a TrialBatch.
+
+    The network runs on ``chunk`` trials at a time (bounds memory; the result does not
+    depend on it); ``progress`` shows a bar over the trials.
+    """
+    from tqdm.auto import tqdm
+
     network.eval()
     hs, xys, probs = [], [], []
-    for lo in range(0, len(batch), chunk):
-        xy, logits, h = network(torch.from_numpy(batch.inputs[:, lo:lo + chunk]))
-        hs.append(h.numpy())
-        xys.append(xy.numpy())
-        if logits is not None:
-            probs.append(torch.softmax(logits, dim=-1).numpy())
+    with tqdm(total=len(batch), desc=f"record {batch.task}", unit="trial",
+              disable=not progress) as bar:
+        for lo in range(0, len(batch), chunk):
+            xy, logits, h = network(torch.from_numpy(batch.inputs[:, lo:lo + chunk]))
+            hs.append(h.numpy())
+            xys.append(xy.numpy())
+            if logits is not None:
+                probs.append(torch.softmax(logits, dim=-1).numpy())
+            bar.update(h.shape[1])
     h = np.concatenate(hs, axis=1)
     xy = np.concatenate(xys, axis=1).astype(np.float64)
     return h, xy, (np.concatenate(probs, axis=1) if probs else None)
 
 
 def record(network, batch, *, baselines: dict | None = None, session_id: str | None = None,
-           checkpoint: str | None = None, config=None, chunk: int = 250):
+           checkpoint: str | None = None, config=None, chunk: int = 250,
+           progress: bool = False):
     """Run ``network`` on ``batch`` and return its recording.
 
     Parameters
@@ -91,6 +101,11 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
         Dataset attrs (defaults: ``"<task>-<split>-seed<seed>"`` and the network's file).
     config : TaskConfig, optional
         Must be the batch's own configuration (``batch.config``, the default) if given.
+    chunk : int
+        Trials run through the network at once (bounds memory; results do not depend on
+        it).
+    progress : bool
+        Show a progress bar over the trials (``hippo-probe record`` does).
 
     Returns
     -------
@@ -120,7 +135,7 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
                       f"{task.world.name!r} trials: its units are recorded outside the "
                       f"world they learned (the recording's attrs say both)", UserWarning,
                       stacklevel=2)
-    h, xy, prob = run_network(network, batch, chunk)
+    h, xy, prob = run_network(network, batch, chunk, progress=progress)
     T, B, H = h.shape
     net_task = getattr(network, "task", None) or batch.task
     # the readout speaks in the frame of the task the network was trained on

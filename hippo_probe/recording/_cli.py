@@ -1,16 +1,24 @@
 """``hippo-probe import-nwb``."""
 
+from ..cli import check_output, one_of
+
 
 def add_commands(sub):
     p = sub.add_parser("import-nwb", help="import an NWB session as a recording (zarr)")
-    p.add_argument("nwb", metavar="SESSION.nwb")
-    p.add_argument("dest", metavar="DEST.zarr", help="e.g. recordings/NAME.zarr")
+    p.add_argument("nwb", metavar="SESSION.nwb", help="the NWB file to read")
+    p.add_argument("dest", metavar="DEST.zarr",
+                   help="zarr store to write, e.g. recordings/NAME.zarr")
     p.add_argument("--epoch", default="wake",
-                   help="epoch tag to import (default 'wake'); 'all' for the whole file")
+                   help="epoch tag to import; 'all' for the whole file")
     p.add_argument("--floor-axes", nargs=2, default=None, metavar=("A", "B"),
-                   help="position axes forming the floor (default: the two that vary most)")
+                   help="the two position axes forming the floor, mapped to (x, y): series "
+                        "of the Position container, or x, y, z for the columns of one 2-D "
+                        "series (default: the two that vary most)")
     p.add_argument("--head-direction-sign", default="auto", choices=["auto", "1", "-1"],
-                   help="sign of the compass angle (default: from the axes' handedness)")
+                   type=one_of("head_direction_sign", ("auto", "1", "-1")),
+                   help="factor on the file's compass angle that makes head direction "
+                        "counter-clockwise from the first floor axis toward the second: 1 "
+                        "keeps it, -1 negates it, auto reads it from the axes' handedness")
     p.add_argument("--no-trials", action="store_true",
                    help="ignore the file's trials table (one trial per epoch)")
     p.add_argument("--overwrite", action="store_true", help="replace DEST if it exists")
@@ -18,13 +26,9 @@ def add_commands(sub):
 
 
 def _import_nwb(args):
-    import os
+    check_output("DEST", args.dest, overwrite=args.overwrite)   # before the slow import
 
     from . import from_nwb, save_recording
-
-    if os.path.exists(args.dest) and not args.overwrite:   # fail before the slow import
-        raise FileExistsError(f"`dest` already exists: {args.dest}; pass --overwrite to "
-                              "replace it")
 
     sign = args.head_direction_sign if args.head_direction_sign == "auto" else int(
         args.head_direction_sign)

@@ -1,6 +1,7 @@
 """``hippo-probe train`` and ``hippo-probe evaluate``."""
 
-from ..tasks import TASKS
+from ..cli import one_of
+from ..tasks import SPLITS, TASKS
 from ..world.config import WORLDS
 
 
@@ -9,48 +10,78 @@ def add_commands(sub):
     from .config import TrainConfig
     d = TrainConfig()
     p = sub.add_parser("train", help="train (or resume) a network; see TrainConfig")
-    p.add_argument("--task", required=True, choices=TASKS)
-    p.add_argument("--world", choices=WORLDS, default=d.world,
-                   help=f"world of the trials (default {d.world}, the study's; compass: "
-                        f"no heading drift)")
-    p.add_argument("--trials", type=int, default=None,
-                   help="training-set size (default: the study's, 5k/300k/250k)")
-    p.add_argument("--steps", type=int, default=d.steps, help="optimizer steps (budget)")
-    p.add_argument("--batch-size", type=int, default=d.batch_size)
-    p.add_argument("--lr", type=float, default=d.lr)
-    p.add_argument("--lr-final", type=float, default=d.lr_final)
-    p.add_argument("--hidden-size", type=int, default=d.hidden_size)
-    p.add_argument("--validate-every", type=int, default=d.validate_every)
-    p.add_argument("--validation-trials", type=int, default=d.n_validation)
-    p.add_argument("--test-trials", type=int, default=d.n_test)
-    p.add_argument("--checkpoint-minutes", type=float, default=d.checkpoint_minutes)
-    p.add_argument("--threads", type=int, default=d.threads)
+    p.add_argument("--task", required=True, choices=TASKS, type=one_of("task", TASKS),
+                   help="the task to learn (see hippo_probe.tasks)")
+    p.add_argument("--world", choices=WORLDS, type=one_of("world", WORLDS), default=d.world,
+                   help="world of every trial of the run: darkness (the study's: the sensed "
+                        "heading drifts) or compass (no drift)")
+    p.add_argument("--trials", type=int, default=None, metavar="N",
+                   help="training-set size, trials 0..N-1 of the train split (default: the "
+                        "study's, 5,000 / 300,000 / 250,000 for localization / generalized / "
+                        "specialized)")
+    p.add_argument("--steps", type=int, default=d.steps,
+                   help="budget in optimizer (Adam) steps")
+    p.add_argument("--batch-size", type=int, default=d.batch_size,
+                   help="trials (sequences of 500 time steps) per optimizer step")
+    p.add_argument("--lr", type=float, default=d.lr,
+                   help="initial Adam learning rate, cosine-decayed to --lr-final")
+    p.add_argument("--lr-final", type=float, default=d.lr_final,
+                   help="learning rate at the end of the budget")
+    p.add_argument("--hidden-size", type=int, default=d.hidden_size,
+                   help="LSTM units (the recorded cells)")
+    p.add_argument("--validate-every", type=int, default=d.validate_every, metavar="STEPS",
+                   help="optimizer steps between validations (the best network by "
+                        "validation loss is kept)")
+    p.add_argument("--validation-trials", type=int, default=d.n_validation, metavar="N",
+                   help="trials of the validation split used at each validation")
+    p.add_argument("--test-trials", type=int, default=d.n_test, metavar="N",
+                   help="trials of the test split scored at the end")
+    p.add_argument("--checkpoint-minutes", type=float, default=d.checkpoint_minutes,
+                   metavar="MIN", help="wall time between checkpoints (min)")
+    p.add_argument("--threads", type=int, default=d.threads, metavar="N",
+                   help="CPU threads of torch and numba in this process")
     p.add_argument("--precision", choices=("auto", *PRECISIONS), default=d.precision,
+                   type=one_of("precision", ("auto", *PRECISIONS)),
                    help="matmul precision of training: bf16 (AMX matmuls, float32 state "
                         "and optimizer), fp32, or auto = bf16 where the CPU has bf16 "
-                        f"hardware, else fp32 (default {d.precision})")
-    p.add_argument("--seed", type=int, default=d.seed, help="seed of the task's splits")
-    p.add_argument("--init-seed", type=int, default=d.init_seed)
-    p.add_argument("--class-weight", type=float, default=None)
-    p.add_argument("--init-from", default=None,
-                   help="initialise from a checkpoint / pretrained name")
+                        "hardware, else fp32")
+    p.add_argument("--seed", type=int, default=d.seed,
+                   help="seed of the task's splits (which trials exist)")
+    p.add_argument("--init-seed", type=int, default=d.init_seed,
+                   help="seed of the initial parameters and of the order of training trials")
+    p.add_argument("--class-weight", type=float, default=None, metavar="LAMBDA",
+                   help="weight of the arena classification (cross-entropy) term of the "
+                        "loss (default: half the squared position error at chance, "
+                        "0.5 var(target) / ln(number of arenas))")
+    p.add_argument("--init-from", default=None, metavar="NETWORK",
+                   help="initialise from a checkpoint (.pt) or a pretrained name (default: "
+                        "random initial parameters)")
     p.add_argument("--train-only", choices=["classifier"], default=None,
-                   help="freeze all but the arena readout (readout retraining)")
-    p.add_argument("--cache-dir", default=None, help="trial cache (default ~/.cache/...)")
-    p.add_argument("--out", required=True, help="run directory (resumes if it exists)")
-    p.add_argument("--no-progress", action="store_true")
+                   type=one_of("train_only", ("classifier",)),
+                   help="classifier: freeze all but the arena readout and retrain it "
+                        "(specialized task, needs --init-from; default: train everything)")
+    p.add_argument("--cache-dir", default=None, metavar="FOLDER",
+                   help="cache of generated trials (default: $HIPPO_PROBE_CACHE or "
+                        "~/.cache/hippo_probe/trials)")
+    p.add_argument("--out", required=True, metavar="FOLDER",
+                   help="run directory: checkpoint.pt, network.pt, log.json (resumes the "
+                        "run if it exists)")
+    p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(run=_train)
 
     e = sub.add_parser("evaluate", help="errors / accuracy of a network on a split")
-    e.add_argument("checkpoint", help="a .pt file (run checkpoint, network.pt) or a "
-                                      "pretrained name")
-    e.add_argument("--split", default="test", choices=["train", "validation", "test"])
-    e.add_argument("--trials", type=int, default=1000)
-    e.add_argument("--seed", type=int, default=0)
-    e.add_argument("--task", default=None, choices=TASKS,
-                   help="evaluate on another task than the network's own")
-    e.add_argument("--world", default=None, choices=WORLDS,
-                   help="evaluate in another world than the network's own")
+    e.add_argument("checkpoint", metavar="NETWORK",
+                   help="a .pt file (run checkpoint, network.pt) or a pretrained name (e.g. "
+                        "generalized)")
+    e.add_argument("--split", default="test", choices=SPLITS, type=one_of("split", SPLITS),
+                   help="split of the trials")
+    e.add_argument("--trials", type=int, default=1000, metavar="N", help="number of trials")
+    e.add_argument("--seed", type=int, default=0, help="seed of the split")
+    e.add_argument("--task", default=None, choices=TASKS, type=one_of("task", TASKS),
+                   help="task whose trials to run (default: the network's own)")
+    e.add_argument("--world", default=None, choices=WORLDS, type=one_of("world", WORLDS),
+                   help="world of the trials (default: the network's own)")
+    e.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     e.set_defaults(run=_evaluate)
 
 
@@ -87,10 +118,8 @@ def _evaluate(a):
     import math
 
     from ..pretrained import load_pretrained
-    from ..tasks import make_trials
+    from ..tasks import make_trials, task_config
     from .trainer import evaluate_network, summarize
-
-    from ..tasks import task_config
 
     if a.trials < 1:
         raise ValueError(f"`--trials` must be >= 1; got {a.trials}")
@@ -102,7 +131,9 @@ def _evaluate(a):
     # score the readout in the frame of the task the network was trained on
     start_relative = task_config(net.task).target == "start_relative"
     target = batch.position - batch.start[None] if start_relative else batch.position
-    metrics = summarize(evaluate_network(net, batch, weight, target=target), batch.dt)
+    metrics = evaluate_network(net, batch, weight, target=target,
+                               progress=not a.no_progress)
+    metrics = summarize(metrics, batch.dt)
     broken = sorted(k for k, v in metrics.items()
                     if isinstance(v, float) and not math.isfinite(v))
     if broken:

@@ -127,12 +127,13 @@ def losses(net, inputs, target, environment, class_weight, *, classifier_only=Fa
 
 @torch.no_grad()
 def evaluate_network(net, batch, class_weight: float = 0.0, chunk: int = 250, *,
-                     target=None) -> dict:
+                     target=None, progress: bool = False) -> dict:
     """Errors of ``net`` on a TrialBatch: per-step curves and summaries.
 
     ``target`` (T, B, 2) defaults to ``batch.target``; pass the batch's positions in the
     network's own frame to evaluate it on another task's trials. Classification is scored
-    only on trials of the specialized task (whose arena ids are the classes).
+    only on trials of the specialized task (whose arena ids are the classes). ``progress``
+    shows a bar over the trials.
 
     Returns a dict with ``error_m`` (T,) mean Euclidean error vs time, ``accuracy`` (T,)
     (if the network classifies), overall means and the loss.
@@ -143,6 +144,8 @@ def evaluate_network(net, batch, class_weight: float = 0.0, chunk: int = 250, *,
     err_sum = np.zeros(batch.n_steps)
     acc_sum = np.zeros(batch.n_steps)
     mse_sum = ce_sum = 0.0
+    bar = tqdm(total=len(batch), desc=f"evaluate {batch.task}", unit="trial",
+               disable=not progress)
     for lo in range(0, len(batch), chunk):
         sl = slice(lo, lo + chunk)
         _, mse, ce, xy, logits = losses(net, batch.inputs[:, sl], target[:, sl],
@@ -157,6 +160,8 @@ def evaluate_network(net, batch, class_weight: float = 0.0, chunk: int = 250, *,
         if logits is not None:
             hit = logits.argmax(-1).cpu() == torch.from_numpy(batch.environment[sl])
             acc_sum += hit.float().sum(1).numpy()
+        bar.update(xy.shape[1])
+    bar.close()
     net.train()
     n = len(batch)
     out = {"error_m": err_sum / n, "mean_error_m": float(err_sum.sum() / n / batch.n_steps),

@@ -1,17 +1,25 @@
 """``hippo-probe world-stats``."""
 
+from ..cli import one_of
+from ..tasks import SPLITS
+from .config import WORLDS
+
 
 def add_commands(sub):
     p = sub.add_parser("world-stats", help="statistics of each task's trials, and a picture")
-    p.add_argument("--trials", type=int, default=500, help="trials per task (default 500)")
-    p.add_argument("--world", default="darkness",
-                   help="the world: darkness (the default, the study's) or compass (no drift)")
-    p.add_argument("--split", default="test",
-                   help="split of the trials: train, validation or test (default test)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the split (default 0)")
+    p.add_argument("--trials", type=int, default=500, metavar="N",
+                   help="trials per task")
+    p.add_argument("--world", default="darkness", choices=WORLDS, type=one_of("world", WORLDS),
+                   help="the world: darkness (the study's: the sensed heading drifts) or "
+                        "compass (no drift)")
+    p.add_argument("--split", default="test", choices=SPLITS, type=one_of("split", SPLITS),
+                   help="split of the trials")
+    p.add_argument("--seed", type=int, default=0, help="seed of the split")
     p.add_argument("--plot", default=None, metavar="PNG",
-                   help="save example arenas with trajectories and contacts here")
-    p.add_argument("--json", default=None, metavar="FILE", help="also write the numbers here")
+                   help="save example arenas with trajectories and wall contacts here "
+                        "(default: no picture)")
+    p.add_argument("--json", default=None, metavar="FILE",
+                   help="also write the numbers here, as JSON (default: only printed)")
     p.set_defaults(run=_world_stats)
 
 

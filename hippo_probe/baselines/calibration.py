@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._angles import wrap_angle
 from .._validators import check_seed
 
 
@@ -55,9 +56,15 @@ def posterior_ranks(result, batch, *, seed: int = 0) -> dict:
     u = np.stack([np.cos(angle), np.sin(angle)], axis=-1)
     along = np.einsum("kbnd,kbd->kbn", p, u)
     true_along = np.einsum("kbd,kbd->kb", truth, u)
-    drift = batch.heading_drift[steps]
+    # the drift is an angle: ranked as its wrapped offset from the posterior's circular
+    # mean, so a filter started unoriented (drift uniform on the circle) ranks correctly
+    # too; for the small drifts of an oriented start this is the plain ordering
+    drifts = result.particle_drifts
+    centre = np.angle(np.einsum("kbn,kbn->kb", w, np.exp(1j * drifts)))[..., None]
+    offset = wrap_angle(drifts - centre)
+    true_offset = wrap_angle(batch.heading_drift[steps][..., None] - centre)
     return {
         "mahalanobis": np.sum(w * (own < true[..., None]), axis=-1).ravel(),
         "projection": np.sum(w * (along < true_along[..., None]), axis=-1).ravel(),
-        "drift": np.sum(w * (result.particle_drifts < drift[..., None]), axis=-1).ravel(),
+        "drift": np.sum(w * (offset < true_offset), axis=-1).ravel(),
     }

@@ -180,3 +180,20 @@ def test_a_filter_configuration_that_disagrees_with_the_batch_is_refused():
         particle_filter(batch, 10, config=task_config("generalized", "compass"))
     # the batch's own configuration is accepted
     particle_filter(batch, 10, config=batch.config)
+
+
+def test_drift_ranks_wrap_around_the_circle():
+    """Particles spread across +-pi around a truth near pi: the truth sits mid-posterior
+    (rank 0.5), which a plain ordering of the angles would call an extreme (~0 or ~1)."""
+    from types import SimpleNamespace
+
+    rng = np.random.default_rng(0)
+    n = 2000
+    drifts = (np.pi + rng.normal(0, 0.3, n) + np.pi) % (2 * np.pi) - np.pi
+    result = SimpleNamespace(
+        particles=rng.normal(0, 0.1, (1, 1, n, 2)), particle_weights=np.full((1, 1, n), 1 / n),
+        particle_drifts=drifts[None, None], attrs={"kept_steps": [0]})
+    batch = SimpleNamespace(position=np.zeros((1, 1, 2)),
+                            heading_drift=np.array([[np.pi - 1e-3]]))
+    rank = posterior_ranks(result, batch)["drift"]
+    assert abs(float(rank[0]) - 0.5) < 0.05

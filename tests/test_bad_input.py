@@ -184,6 +184,13 @@ def test_a_checkpoint_of_other_shapes_is_one_clear_line(shipped, tmp_path, capsy
     err = capsys.readouterr().err
     assert "does not fit this Navigator" in err and "size mismatch" in err
     assert err.count("\n") == 1
+    # a parameter missing altogether
+    first = next(iter(shipped["model"]))
+    save_atomic(dict(shipped, model={k: v for k, v in shipped["model"].items() if k != first}),
+                tmp_path / "missing.pt")
+    assert main(["evaluate", str(tmp_path / "missing.pt"), "--trials", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "does not fit this Navigator" in err and "Missing key" in err and first in err
 
 
 def test_resuming_a_checkpoint_without_optimizer_state_names_what_is_missing(

@@ -1,135 +1,33 @@
 """Network units vs real rodent cells, with the same analyses on the same layout.
 
-The real session (tests/data/A2929-200711.nwb: head-direction cells of the anterodorsal
-thalamus and CA1 cells of a mouse, from the pynapple project) is imported with
-``hippo_probe.from_nwb``; the network session is a recording of the shipped localization
-network in its familiar 1 m arena (the closest analogue of the mouse's open field). Both go
-through the very same calls: head-direction tuning (60 bins, no smoothing), Skaggs
-spatial information and spatial selectivity.
+A thin entry point over :func:`hippo_probe.paper.rodent.make` (which ``hippo-probe
+figures`` calls; its docstring says what is compared). The network's recording is cached
+in the repository's ``recordings/paper-<size>/``, as the figure scripts' are.
 
-    python analyses/network_vs_rodent.py [--size tiny|full] [--out figures/]
+    python analyses/network_vs_rodent.py [--size tiny|full|paper] [--out figures/]
 
 Writes ``network_vs_rodent.png/.pdf`` (one figure), ``network_vs_rodent.md`` (one table)
 and ``network_vs_rodent.json``.
 """
 
 import argparse
-import json
-import sys
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-import hippo_probe as hp  # noqa: E402
+from hippo_probe.paper import rodent
+from hippo_probe.paper.config import CONFIGS, with_cache
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "paper_figures"))
-import _common as C  # noqa: E402
-
-SESSION = ROOT / "tests" / "data" / "A2929-200711.nwb"
-BIN_ANIMAL = 0.04     # m: the mouse's arena is ~0.5 m across (~12 x 12 bins)
-BIN_NETWORK = 0.16    # m: the network's arena is ~2 m across (~13 x 13 bins)
-HD_BINS = 60
-
-
-def summarize(rec, groups, bin_size):
-    """Per-unit HD mean vector length, Skaggs information and selectivity, by group."""
-    hd = hp.head_direction_tuning(rec, n_bins=HD_BINS, sigma=0.0)
-    info = hp.spatial_information(rec, bin_size=bin_size, sigma=0.0)
-    sel = hp.spatial_selectivity(rec, bin_size=bin_size)
-    out = {}
-    for name, mask in groups.items():
-        out[name] = {
-            "n_units": int(mask.sum()),
-            "mean_vector_length": hd.mean_vector_length.values.ravel()[mask],
-            "hd_p_value": hd.p_value.values.ravel()[mask],
-            "spatial_information": info.information.values.ravel()[mask],
-            "information_units": info.information.attrs.get("units", ""),
-            "selectivity": sel.selectivity.values.ravel()[mask],
-        }
-    return hd, out
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--size", choices=sorted(C.CONFIGS), default="full")
+    ap.add_argument("--size", choices=sorted(CONFIGS), default="full")
     ap.add_argument("--out", default=str(ROOT / "figures"))
+    ap.add_argument("--session", default=str(ROOT / rodent.SESSION),
+                    help="the mouse's NWB session")
     a = ap.parse_args()
-    cfg, out = C.CONFIGS[a.size], Path(a.out)
-
-    mouse = hp.from_nwb(SESSION, epoch="wake")
-    region = mouse.region.values.astype(str)
-    _, mouse_sum = summarize(mouse, {"mouse ADn": region == "adn",
-                                     "mouse CA1": region == "ca1"}, BIN_ANIMAL)
-    net = C.recording("localization", cfg)
-    _, net_sum = summarize(net, {"network (localization)":
-                                 np.ones(net.sizes["unit"], bool)}, BIN_NETWORK)
-    groups = {**mouse_sum, **net_sum}
-
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), constrained_layout=True)
-    colors = {"mouse ADn": "tab:red", "mouse CA1": "tab:blue",
-              "network (localization)": "k"}
-    for ax, key, label in zip(axes, ("mean_vector_length", "spatial_information",
-                                     "selectivity"),
-                              ("head-direction mean vector length R",
-                               "Skaggs information (mouse: bits/spike; network: bits per "
-                               "unit of activity)",
-                               "spatial selectivity (variance explained)")):
-        for name, g in groups.items():
-            v = np.sort(g[key][np.isfinite(g[key])])
-            if len(v):
-                ax.plot(v, np.arange(1, len(v) + 1) / len(v), drawstyle="steps-post",
-                        color=colors[name], label=f"{name}, n = {g['n_units']}")
-        ax.set_xlabel(label)
-        ax.set_ylabel("cumulative fraction of units")
-    axes[1].legend(frameon=False, fontsize=8, loc="center right")  # the empty corner
-    fig.suptitle("Same analyses, same recording layout: mouse cells vs network units")
-    out.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out / "network_vs_rodent.png", dpi=130)
-    fig.savefig(out / "network_vs_rodent.pdf")
-
-    def med(x):
-        x = x[np.isfinite(x)]
-        return float(np.median(x)) if len(x) else float("nan")
-
-    lines = ["| group | units | median HD mean vector length | fraction R > 0.5 | "
-             "fraction HD-significant (p < 0.01) | median Skaggs information | "
-             "median selectivity |",
-             "| --- | --- | --- | --- | --- | --- | --- |"]
-    table = {}
-    for name, g in groups.items():
-        mvl = g["mean_vector_length"]
-        row = {"units": g["n_units"], "median_mvl": med(mvl),
-               "fraction_mvl_gt_0.5": float(np.mean(mvl[np.isfinite(mvl)] > 0.5)),
-               "fraction_hd_significant": float(np.mean(g["hd_p_value"] < 0.01)),
-               "median_information": med(g["spatial_information"]),
-               "information_units": g["information_units"],
-               "median_selectivity": med(g["selectivity"])}
-        table[name] = row
-        lines.append(f"| {name} | {row['units']} | {row['median_mvl']:.3f} | "
-                     f"{row['fraction_mvl_gt_0.5']:.2f} | {row['fraction_hd_significant']:.2f} | "
-                     f"{row['median_information']:.3f} "
-                     f"{row['information_units']} | {row['median_selectivity']:.3f} |")
-    lines += ["", "Read across rows with care. Head-direction R comes from 60-bin tuning "
-              "curves in both, but spikes have a true zero while the network's signed "
-              "activity is measured from each unit's minimum, so R is comparable within a "
-              "row; the fraction significant against 100 circular time-shift shuffles is "
-              "the comparison across rows. Skaggs information is in bits per spike for the "
-              "mouse and bits per unit of (min-shifted) activity for the network, and "
-              "selectivity (variance explained by position) of ~8 ms spike counts (120 Hz "
-              "samples) is capped by Poisson noise while the network's h is noise-free — "
-              "a higher value for the network does not make its units 'more spatial' than CA1 cells."]
-    (out / "network_vs_rodent.md").write_text("\n".join(lines) + "\n")
-    (out / "network_vs_rodent.json").write_text(json.dumps(C.jsonable(
-        {"size": a.size, "table": table,
-         "per_unit": {n: {k: v for k, v in g.items() if isinstance(v, np.ndarray)}
-                      for n, g in groups.items()}}), indent=1))
-    print("\n".join(lines))
-    print(f"wrote {out}/network_vs_rodent.png/.pdf/.md/.json")
+    rodent.make(with_cache(CONFIGS[a.size], ROOT / "recordings"), Path(a.out),
+                session=a.session)
 
 
 if __name__ == "__main__":

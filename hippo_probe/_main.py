@@ -1,12 +1,17 @@
-"""``hippo-probe main`` (the README's main job) and ``hippo-probe figures``."""
+"""``hippo-probe main`` (the README's main job) and ``hippo-probe figures``.
+
+Both call the figure builders of :mod:`hippo_probe.paper` in process and write under
+their ``--out`` only; the repository's tracked copies (``paper_figures/png/*.png``,
+``paper_figures/RESULTS.md``) are refreshed only by ``--refresh-tracked`` (``main`` passes
+it on at the paper size), and only from a run of every figure at the paper size.
+"""
 
 import time
-from pathlib import Path
 
 from .cli import check_output, one_of
 
-ROOT = Path(__file__).resolve().parents[1]
-FIGURES = ("fig2", "fig3", "fig4", "fig5")
+# the names only: the builders (matplotlib, torch) are imported when a command runs
+from .paper import FIGURES
 
 
 def add_commands(sub):
@@ -14,47 +19,65 @@ def add_commands(sub):
     size_help = ("data size: full, 200 test trials, about 2 minutes from scratch on 2 cores; "
                  "paper, the study's scale: 1,000 test trials and PF-SLAM on 100 (about 4 "
                  "minutes); tiny, a smoke test")
+    cache_help = ("folder of the cached recordings, reused by later runs of the same size "
+                  "(default: OUT/cache)")
     p = sub.add_parser("main", help="the README's main job: world statistics and every "
-                                    "paper figure, into one folder")
+                                    "paper figure, into one folder; at the paper size it "
+                                    "also refreshes the tracked copies (paper_figures/png, "
+                                    "paper_figures/RESULTS.md)")
     p.add_argument("--out", default="figures", metavar="FOLDER",
                    help="folder of the figures and their numbers")
     p.add_argument("--size", default="paper", choices=sizes, type=one_of("size", sizes),
                    help=size_help)
+    p.add_argument("--cache", default=None, metavar="FOLDER", help=cache_help)
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(run=_main)
-    f = sub.add_parser("figures", help="regenerate the paper figures and RESULTS.md")
+    f = sub.add_parser("figures", help="regenerate the paper figures and RESULTS.md into "
+                                       "--out (nothing else is written)")
     f.add_argument("--out", default="figures", metavar="FOLDER",
-                   help="folder of the figures and their numbers")
+                   help="folder of the figures, their numbers and RESULTS.md")
     f.add_argument("--size", default="full", choices=sizes, type=one_of("size", sizes),
                    help=size_help)
     f.add_argument("--only", nargs="*", choices=FIGURES, default=None, metavar="FIG",
                    type=one_of("only", FIGURES),
                    help=f"make only these figures, of {', '.join(FIGURES)} (default: all)")
+    f.add_argument("--cache", default=None, metavar="FOLDER", help=cache_help)
+    f.add_argument("--refresh-tracked", action="store_true",
+                   help="also copy the figures and RESULTS.md over the repository's tracked "
+                        "copies (paper_figures/png/*.png, paper_figures/RESULTS.md); only "
+                        "with --size paper and every figure (no --only)")
     f.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     f.set_defaults(run=_figures)
 
 
-def _load(name):
-    """Import a script of paper_figures/ (by its file name) as a module."""
-    import importlib
-    import sys
+def _check_refresh(args):
+    """Refuse --refresh-tracked, before any work, unless every figure runs at the paper
+    size: the tracked copies show the study's scale, and a partial run would turn the
+    other claims of RESULTS.md into "n/a"."""
+    if not args.refresh_tracked:
+        return
+    if args.size != "paper":
+        raise ValueError(f"--refresh-tracked needs --size paper (the tracked copies show "
+                         f"the study's scale); got --size {args.size}")
+    if args.only is not None:
+        raise ValueError("--refresh-tracked needs every figure; drop --only "
+                         f"{' '.join(args.only)}")
+    from .paper.tracked import check_repository
 
-    folder = ROOT / "paper_figures"
-    if not (folder / f"{name}.py").exists():
-        raise FileNotFoundError(f"{folder / name}.py not found: `hippo-probe figures` runs "
-                                f"from a clone of the repository (the figure scripts are "
-                                f"not package data)")
-    if str(folder) not in sys.path:
-        sys.path.insert(0, str(folder))
-    return importlib.import_module(name)
+    check_repository()      # a clone to refresh, or one clear line now
 
 
-def _figures(args):
+def _figures(args, *, extra_tracked=()):
+    _check_refresh(args)
+    out = check_output("--out", args.out, kind="folder")
+    cache = out / "cache" if args.cache is None else check_output(
+        "--cache", args.cache, kind="folder")
     from tqdm.auto import tqdm
 
-    out = check_output("--out", args.out, kind="folder")
-    common = _load("_common")
-    cfg = common.CONFIGS[args.size]
+    from . import paper
+    from .paper import config
+
+    cfg = config.with_cache(config.CONFIGS[args.size], cache)
     t_all = time.time()
     names = args.only or FIGURES
     with tqdm(names, desc="figures", unit="figure", disable=args.no_progress) as bar:
@@ -62,55 +85,57 @@ def _figures(args):
             t0 = time.time()
             bar.set_postfix_str(name)
             tqdm.write(f"== {name} ({args.size}) ==")
-            _load(name).make(cfg, out)
+            paper.builder(name).make(cfg, out)
             tqdm.write(f"   {name} done in {time.time() - t0:.0f} s")
-    results = _load("results")
-    import sys
-    argv = sys.argv
-    # the repository's RESULTS.md only from full-size data; other sizes write beside
-    # their figures
-    table = (ROOT / "paper_figures" / "RESULTS.md") if args.size in ("full", "paper") \
-        else out / "RESULTS.md"
-    sys.argv = ["results.py", "--figures", str(out), "--out", str(table)]
+    made = list(names)
+    from .paper.results import NOTES, write_results
     try:
-        results.main()
-    finally:
-        sys.argv = argv
-    comparison = ROOT / "analyses" / "network_vs_rodent.py"
-    if comparison.exists():
+        notes = config.repository_file(NOTES, argument="notes")
+    except FileNotFoundError:
+        if args.refresh_tracked:
+            raise
+        notes = None
+        print(f"(no {NOTES}: RESULTS.md without the notes; run from a clone for them)")
+    print(f"wrote {write_results(out, out / 'RESULTS.md', notes)}")
+    from .paper import rodent
+    try:
+        session = config.repository_file(rodent.SESSION, argument="session")
+    except FileNotFoundError:
+        if args.refresh_tracked:
+            raise
+        print(f"(no {rodent.SESSION}: the network-vs-rodent comparison runs from a clone)")
+    else:
         print("== network vs rodent ==")
-        import subprocess
-        subprocess.run([sys.executable, str(comparison), "--size", args.size, "--out",
-                        str(out)], check=True)
-    if args.size in ("full", "paper"):
-        _update_readme_images(out)
+        rodent.make(cfg, out, session=session)
+        made.append("network_vs_rodent")
+    if args.refresh_tracked:
+        from .paper.tracked import refresh_tracked
+        for path in refresh_tracked(out, [*made, *extra_tracked]):
+            print(f"refreshed {path}")
     print(f"all figures in {out}/ ({time.time() - t_all:.0f} s)")
 
 
-def _update_readme_images(out):
-    """Refresh the README's copies (paper_figures/png/) of the figures just made, like
-    RESULTS.md: the repository shows what its own networks give."""
-    import shutil
-
-    shown = ROOT / "paper_figures" / "png"
-    if not shown.is_dir():
-        return
-    for old in shown.glob("*.png"):
-        new = Path(out) / old.name
-        if new.exists():
-            shutil.copyfile(new, old)
-
-
 def _main(args):
+    out = check_output("--out", args.out, kind="folder")
+    if args.cache is not None:
+        check_output("--cache", args.cache, kind="folder")
+    from .paper._repository import REPOSITORY
+
+    # the main job at the study's scale regenerates the repository's tracked copies too,
+    # when it runs from a clone (an installed package has none)
+    refresh = args.size == "paper" and REPOSITORY is not None
+    if args.size == "paper" and not refresh:
+        print("(not a clone of the repository: no tracked copies to refresh)")
     from ._atomic import save_figure
     from .world.stats import format_stats, plot_example_trials, world_stats
 
-    out = check_output("--out", args.out, kind="folder")
     out.mkdir(parents=True, exist_ok=True)
     print("== World statistics (500 test trials per task) ==")
     print(format_stats(world_stats(n_trials=500)))
     fig = plot_example_trials()
     save_figure(fig, out / "example_trials.png", dpi=120)
     print(f"saved {out / 'example_trials.png'}")
-    _figures(args.__class__(out=args.out, size=args.size, only=None,
-                            no_progress=args.no_progress))
+    _figures(args.__class__(out=args.out, size=args.size, only=None, cache=args.cache,
+                            refresh_tracked=refresh,
+                            no_progress=args.no_progress),
+             extra_tracked=("example_trials",))

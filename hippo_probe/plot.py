@@ -4,14 +4,26 @@
 >>> fig = maps.hp.plot()             # doctest: +SKIP
 
 Every helper returns the matplotlib Figure and labels its axes from the result's
-``units`` and ``long_name`` attrs. matplotlib is imported on first use only, so importing
-the analyses stays light.
+``units`` and ``long_name`` attrs. Single-axes plots take ``ax=``, grids take ``fig=`` (a
+Figure or SubFigure to draw the grid in) or ``axes=`` (one Axes per panel), so a plot can
+go into a figure of one's own; they then return that figure:
+
+>>> fig, (a, b) = plt.subplots(1, 2)                      # doctest: +SKIP
+>>> hp.spatial_information(rec).hp.plot(ax=a)             # doctest: +SKIP
+
+matplotlib is imported on first use only, so importing the analyses stays light.
 """
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
+
+#: Fraction of a map's peak below which a negative minimum is shown as 0 (its colour and
+#: its title): smoothing noise around silent bins, not signed activity.
+NEGLIGIBLE_MINIMUM = 0.01
 
 
 def _plt():
@@ -29,8 +41,108 @@ def _label(da, default=""):
 
 
 def _grid(n, max_cols):
-    cols = min(n, max_cols)
-    return cols, int(np.ceil(n / cols))
+    cols = max(1, min(n, max_cols))
+    return cols, max(1, int(np.ceil(n / cols)))
+
+
+def _figure(figsize):
+    # constrained layout keeps titles, colour bars and labels apart without tight_layout,
+    # which would also move a user's own axes
+    return _plt().figure(figsize=figsize, layout="constrained")
+
+
+def _one_axes(ax, figsize):
+    """The given Axes and its figure, or a new figure holding one Axes."""
+    if ax is None:
+        fig = _figure(figsize)
+        return fig, fig.add_subplot()
+    from matplotlib.axes import Axes
+
+    if not isinstance(ax, Axes):
+        raise TypeError(f"`ax` must be a matplotlib Axes; got {type(ax).__name__}")
+    return ax.figure, ax
+
+
+def _panels(n, *, max_cols, panel, fig=None, axes=None, polar=False, what="unit"):
+    """Axes for ``n`` panels: the given ``axes``, a grid drawn in ``fig`` (a Figure or a
+    SubFigure), or a new figure; returns the figure and the flat list of axes."""
+    from matplotlib.axes import Axes
+    from matplotlib.figure import FigureBase
+
+    if fig is not None and axes is not None:
+        raise ValueError("pass `fig` (a grid is drawn in it) or `axes` (one per panel), "
+                         "not both")
+    kw = {"projection": "polar"} if polar else {}
+    if axes is not None:
+        flat = list(np.ravel(np.asarray(axes, dtype=object)))
+        if not all(isinstance(a, Axes) for a in flat):
+            raise TypeError("`axes` must be a matplotlib Axes or an array of them; got "
+                            f"{type(axes).__name__}")
+        if len(flat) < n:
+            raise ValueError(f"`axes` holds {len(flat)} axes; the plot needs {n} "
+                             f"(one per {what}); pass `units=` to show fewer")
+        if polar and any(a.name != "polar" for a in flat[:n]):
+            raise ValueError("`axes` must be polar axes (subplot_kw={'projection': "
+                             "'polar'}); got " + ", ".join(sorted({a.name for a in flat})))
+        return flat[0].figure, flat
+    cols, rows = _grid(n, max_cols)
+    if fig is None:
+        fig = _figure((max(panel * cols, 3.0) + 0.8, panel * rows + 0.6))
+    elif not isinstance(fig, FigureBase):
+        raise TypeError(f"`fig` must be a matplotlib Figure or SubFigure; got "
+                        f"{type(fig).__name__}")
+    grid = fig.subplots(rows, cols, squeeze=False, subplot_kw=kw)
+    return fig, list(grid.flat)
+
+
+def _bottom_left(axes):
+    """The panel at the bottom left of a set of axes (the one to carry axis labels)."""
+    def key(ax):
+        box = ax.get_position()
+        return round(box.x0, 3), round(box.y0, 3)
+
+    return min(axes, key=key)
+
+
+def _num(value):
+    """A number short enough for a panel title: 31, 3.1, 0.82, 0.0034."""
+    if not np.isfinite(value):
+        return "nan"
+    a = abs(value)
+    text = f"{value:.0f}" if a >= 10 else f"{value:.1f}" if a >= 1 else f"{value:.2g}"
+    return text.replace("-", "\N{MINUS SIGN}")
+
+
+def _units_text(da):
+    units = da.attrs.get("units")
+    return "" if units in (None, "", "1") else f" {units}"
+
+
+def _unit_name(da, u):
+    """'unit 12' and, when the result carries a per-unit ``region``, ' · CA1'."""
+    text = f"unit {u}"
+    if "region" in da.coords and da["region"].dims == ("unit",):
+        text += f" \N{MIDDLE DOT} {da['region'].sel(unit=u).item()}"
+    return text
+
+
+def _pick_group(da, keep, group):
+    """``da`` reduced to one entry of its first dim outside ``keep`` (``group``, default
+    the first), and the (dim, label) chosen; other extra dims take their first entry."""
+    extra = [d for d in da.dims if d not in keep]
+    if not extra:
+        return da, None, None
+    dim = extra[0]
+    label = da[dim].values[0] if group is None else group
+    da = da.sel({dim: label})
+    rest = [d for d in da.dims if d not in keep]
+    return (da.isel({d: 0 for d in rest}) if rest else da), dim, label
+
+
+def _units(da, units, limit):
+    if units is not None:
+        da = da.sel(unit=list(units))
+    return da.isel(unit=slice(0, limit))
 
 
 def _outline(maps, group_dim, label):
@@ -53,9 +165,59 @@ def _outline(maps, group_dim, label):
     return verts[hit[0]] if hit.size else None
 
 
+def _draw_maps(axes, maps, *, cmap, norms, outline, titles):
+    """One image per unit of ``maps`` (unit, y, x) into ``axes``; unused axes are hidden."""
+    from matplotlib.ticker import MaxNLocator
+
+    plt = _plt()
+    ydim, xdim = maps.dims[-2:]
+    x, y = maps[xdim].values, maps[ydim].values
+    half = (x[1] - x[0]) / 2 if len(x) > 1 else 0.5
+    ext = (x[0] - half, x[-1] + half, y[0] - half, y[-1] + half)
+    colours = plt.get_cmap(cmap).with_extremes(bad="white")  # unvisited bins
+    pad = 0.04 * max(ext[1] - ext[0], ext[3] - ext[2])
+    n = maps.sizes["unit"]
+    for ax, u, norm, title in zip(axes, maps["unit"].values, norms, titles):
+        ax.imshow(maps.sel(unit=u).values, origin="lower", extent=ext, cmap=colours,
+                  interpolation="nearest", norm=norm)
+        if outline is not None:
+            closed = np.vstack([outline, outline[:1]])
+            ax.plot(closed[:, 0], closed[:, 1], color="0.2", lw=0.8)
+        ax.set_xlim(ext[0] - pad, ext[1] + pad)
+        ax.set_ylim(ext[2] - pad, ext[3] + pad)
+        ax.set_aspect("equal")
+        for spine in ax.spines.values():
+            spine.set_visible(False)
+        ax.set_title(title, fontsize=7, linespacing=1.1)
+        ax.set_xticks([])
+        ax.set_yticks([])
+    for ax in axes[n:]:
+        ax.axis("off")
+    corner = _bottom_left(axes[:n])
+    corner.set_xlabel(_label(maps[xdim]), fontsize=7, labelpad=1)
+    corner.set_ylabel(_label(maps[ydim]), fontsize=7, labelpad=1)
+    # ticks on one panel only: the scale of the arena without crowding the grid
+    corner.xaxis.set_major_locator(MaxNLocator(3))
+    corner.yaxis.set_major_locator(MaxNLocator(3))
+    corner.tick_params(labelsize=6, length=2, pad=1)
+    return colours
+
+
+def _colorbar(fig, axes, mappable, label, ticks=None, ticklabels=None):
+    cbar = fig.colorbar(mappable, ax=axes, shrink=0.8, aspect=25, pad=0.02, ticks=ticks)
+    if ticklabels is not None:
+        cbar.set_ticklabels(ticklabels)
+    cbar.set_label(label, fontsize=7)
+    cbar.ax.tick_params(labelsize=6)
+    return cbar
+
+
 def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", panel=1.6,
-                 scale="unit"):
-    """A grid of rate maps, one panel per unit, with the arena outline when known.
+                 scale="unit", fig=None, axes=None):
+    """A grid of rate maps, one panel per unit, with the arena outline and a colour bar.
+
+    Each panel is titled with its unit, the unit's ``region`` when the result has one,
+    and its peak with units ("unit 12 · CA1 / peak 3.1 Hz").
 
     Parameters
     ----------
@@ -66,64 +228,121 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
     group : label, optional
         Which environment/trial to show when the maps have a group dim (default: the first).
     scale : {"unit", "shared"}
-        Colour scale per panel (each map from its minimum to its maximum, written in the
-        title) or one scale for all panels, with a colour bar.
+        ``"unit"``: each panel from 0 (or its minimum, when negative) to its own peak,
+        written in its title, the colour bar reading 0..peak; ``"shared"``: one scale
+        for all panels, the colour bar in the maps' units.
+    fig : matplotlib Figure or SubFigure, optional
+        Draw the grid in this figure (e.g. one of ``plt.figure().subfigures(1, 2)``).
+    axes : array of matplotlib Axes, optional
+        Draw one map into each of these axes (at least one per unit shown).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure drawn into (``fig``, the figure of ``axes``, or a new one).
     """
-    plt = _plt()
-    group_dim = next((d for d in maps.dims if d not in ("unit", "y", "x")), None)
-    label = None
-    if group_dim is not None:
-        label = maps[group_dim].values[0] if group is None else group
-        maps = maps.sel({group_dim: label})
-    if units is not None:
-        maps = maps.sel(unit=list(units))
-    maps = maps.isel(unit=slice(0, 64))
-    cols, rows = _grid(maps.sizes["unit"], max_cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(panel * cols, panel * rows + 0.4),
-                             squeeze=False)
-    outline = _outline(maps, group_dim, label)
-    x, y = maps["x"].values, maps["y"].values
-    half = (x[1] - x[0]) / 2 if len(x) > 1 else 0.5
-    ext = (x[0] - half, x[-1] + half, y[0] - half, y[-1] + half)
-    colours = plt.get_cmap(cmap).with_extremes(bad="white")  # unvisited bins
-    pad = 0.04 * max(ext[1] - ext[0], ext[3] - ext[2])
-    shared = dict(vmin=float(maps.min()), vmax=float(maps.max())) if scale == "shared" \
-        else {}
-    for ax, u in zip(axes.flat, maps["unit"].values):
-        m = maps.sel(unit=u)
-        im = ax.imshow(m.values, origin="lower", extent=ext, cmap=colours,
-                       interpolation="nearest", **shared)
-        if outline is not None:
-            closed = np.vstack([outline, outline[:1]])
-            ax.plot(closed[:, 0], closed[:, 1], color="0.2", lw=0.8)
-        ax.set_xlim(ext[0] - pad, ext[1] + pad)
-        ax.set_ylim(ext[2] - pad, ext[3] + pad)
-        for spine in ax.spines.values():
-            spine.set_visible(False)
-        if np.isfinite(m.values).any():
-            ax.set_title(f"{u}  {np.nanmin(m.values):.2g}..{np.nanmax(m.values):.2g}",
-                         fontsize=7)
-        else:
-            ax.set_title(f"{u}  (no data)", fontsize=7)
-        ax.set_xticks([])
-        ax.set_yticks([])
-    for ax in list(axes.flat)[maps.sizes["unit"]:]:
-        ax.axis("off")
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    from ._validators import check_option
+
+    check_option("scale", scale, ("unit", "shared"))
+    maps, group_dim, label = _pick_group(maps, ("unit", "y", "x"), group)
+    maps = _units(maps, units, 64).transpose("unit", "y", "x")
+    fig, axes = _panels(maps.sizes["unit"], max_cols=max_cols, panel=panel, fig=fig,
+                        axes=axes)
+    values = maps.values
+    finite = np.isfinite(values).reshape(len(values), -1).any(1)
+    with warnings.catch_warnings():  # all-NaN maps (a unit never seen) are titled below
+        warnings.simplefilter("ignore", RuntimeWarning)
+        peaks, lows = np.nanmax(values, axis=(1, 2)), np.nanmin(values, axis=(1, 2))
+    # a minimum this close to 0 (noise around a silent bin) is drawn and read as 0
+    lows = np.where(lows < -NEGLIGIBLE_MINIMUM * np.abs(peaks), lows, np.maximum(lows, 0))
+    signed = bool(np.nanmin(lows, initial=0.0) < 0) if finite.any() else False
+    units_txt = _units_text(maps)
+    titles, norms = [], []
+    if scale == "shared" and finite.any():
+        shared = Normalize(float(np.nanmin(lows)) if signed else 0.0, float(np.nanmax(peaks)))
+    for u, ok, peak, low in zip(maps["unit"].values, finite, peaks, lows):
+        head = _unit_name(maps, u)
+        if not ok:
+            titles.append(f"{head}\n(no data)")
+            norms.append(Normalize(0, 1))
+            continue
+        line = f"peak {_num(peak)}{units_txt}"
+        if low < 0:
+            line += f", min {_num(low)}"
+        titles.append(f"{head}\n{line}")
+        lo = min(float(low), 0.0)
+        norms.append(shared if scale == "shared" else
+                     Normalize(lo, float(peak) if peak > lo else lo + 1.0))
+    colours = _draw_maps(axes, maps, cmap=cmap, norms=norms,
+                         outline=_outline(maps, group_dim, label),
+                         titles=titles)
+    used = axes[:maps.sizes["unit"]]
+    if scale == "shared" and finite.any():
+        _colorbar(fig, used, ScalarMappable(shared, colours), _label(maps))
+    else:
+        floor = "min" if signed else "0"
+        # one bar for panels of different scales: it reads from 0 (or each panel's
+        # minimum) to each panel's peak, written in the panel's title
+        _colorbar(fig, used, ScalarMappable(Normalize(0, 1), colours), _label(maps),
+                  ticks=[0, 1], ticklabels=[floor, "peak"])
     title = _label(maps, "rate")
     if group_dim is not None:
-        title += f" — {group_dim} {label}"
+        title += f" \N{EM DASH} {group_dim} {label}"
     fig.suptitle(title, fontsize=9)
-    corner = axes[-1, 0] if (rows - 1) * cols < maps.sizes["unit"] else axes[0, 0]
-    corner.set_xlabel(_label(maps["x"]), fontsize=7)
-    corner.set_ylabel(_label(maps["y"]), fontsize=7)
-    if scale == "shared":
-        fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.6, label=_label(maps))
     return fig
 
 
-def hd_polar(tuning, *, units=None, max_cols=6, panel=1.8):
-    """Polar plots of head-direction tuning curves, one per unit, titled with R and the
-    preferred direction.
+def autocorrelation_grid(acorr, *, units=None, group=None, max_cols=8, cmap="RdBu_r",
+                         panel=1.6, fig=None, axes=None):
+    """A grid of spatial autocorrelograms, one panel per unit, on one -1..1 colour bar.
+
+    Parameters
+    ----------
+    acorr : xarray.DataArray
+        Output of :func:`hippo_probe.spatial_autocorrelation` (unit, [group], lag_y, lag_x).
+    units, group, max_cols, panel, fig, axes
+        As for :func:`ratemap_grid`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    acorr, group_dim, label = _pick_group(acorr, ("unit", "lag_y", "lag_x"), group)
+    acorr = _units(acorr, units, 64).transpose("unit", "lag_y", "lag_x")
+    seen = np.isfinite(acorr.values).any(0)
+    if seen.any():  # crop to the lags defined somewhere (an odd-shaped arena leaves few)
+        rows, cols = np.flatnonzero(seen.any(1)), np.flatnonzero(seen.any(0))
+        acorr = acorr.isel(lag_y=slice(rows[0], rows[-1] + 1),
+                           lag_x=slice(cols[0], cols[-1] + 1))
+    fig, axes = _panels(acorr.sizes["unit"], max_cols=max_cols, panel=panel, fig=fig,
+                        axes=axes)
+    norm = Normalize(-1.0, 1.0)
+    n = acorr.sizes["unit"]
+    colours = _draw_maps(axes, acorr, cmap=cmap, norms=[norm] * n, outline=None,
+                         titles=[_unit_name(acorr, u) for u in acorr["unit"].values])
+    _colorbar(fig, axes[:n], ScalarMappable(norm, colours), _label(acorr),
+              ticks=[-1, 0, 1])
+    title = f"spatial {acorr.attrs.get('long_name', 'autocorrelation')}"
+    if group_dim is not None:
+        title += f" \N{EM DASH} {group_dim} {label}"
+    fig.suptitle(title, fontsize=9)
+    return fig
+
+
+def hd_polar(tuning, *, units=None, group=None, max_cols=6, panel=1.8, fig=None,
+             axes=None):
+    """Polar plots of head-direction tuning curves, one per unit.
+
+    Each panel is titled with its unit, the unit's ``region`` when the result has one,
+    the mean vector length R and the preferred direction in degrees (0-360,
+    counter-clockwise from +x, the convention of the polar axes, whose ticks are in
+    degrees too).
 
     Parameters
     ----------
@@ -131,36 +350,64 @@ def hd_polar(tuning, *, units=None, max_cols=6, panel=1.8):
         Output of :func:`hippo_probe.head_direction_tuning` (or its ``tuning_curve``).
     units : sequence, optional
         Unit ids to show (default: all, at most 48).
+    group : label, optional
+        Which environment/trial to show when the tuning has a group dim (default: the
+        first).
+    fig : matplotlib Figure or SubFigure, optional
+        Draw the grid of polar axes in this figure.
+    axes : array of polar matplotlib Axes, optional
+        Draw one curve into each (``subplot_kw={"projection": "polar"}``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
-    plt = _plt()
+    stats = tuning if isinstance(tuning, xr.Dataset) and "mean_vector_length" in tuning \
+        else None
     curves = tuning["tuning_curve"] if isinstance(tuning, xr.Dataset) else tuning
-    extra = [d for d in curves.dims if d not in ("unit", "direction")]
-    if extra:
-        curves = curves.isel({d: 0 for d in extra})
-    if units is not None:
-        curves = curves.sel(unit=list(units))
-    curves = curves.isel(unit=slice(0, 48))
-    cols, rows = _grid(curves.sizes["unit"], max_cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(panel * cols, panel * rows + 0.4),
-                             subplot_kw={"projection": "polar"}, squeeze=False)
+    curves, group_dim, label = _pick_group(curves, ("unit", "direction"), group)
+    curves = _units(curves, units, 48).transpose("unit", "direction")
+    if stats is not None:
+        stats = stats[["mean_vector_length", "preferred_direction"]]
+        stats, _, _ = _pick_group(stats, ("unit",), label if group_dim else None)
+    n = curves.sizes["unit"]
+    fig, axes = _panels(n, max_cols=max_cols, panel=panel, fig=fig, axes=axes, polar=True)
     theta = curves["direction"].values
     closed = np.r_[theta, theta[:1]]
-    for ax, u in zip(axes.flat, curves["unit"].values):
+    units_txt = _units_text(curves)
+    regions = list(dict.fromkeys(curves["region"].values)) \
+        if "region" in curves.coords and curves["region"].dims == ("unit",) else []
+    for ax, u in zip(axes, curves["unit"].values):
         r = curves.sel(unit=u).values
-        ax.plot(closed, np.r_[r, r[:1]], lw=1)
-        title = f"{u}"
-        if isinstance(tuning, xr.Dataset) and "mean_vector_length" in tuning:
-            sel = {d: tuning[d].values[0] for d in extra}
-            length = tuning["mean_vector_length"].sel(unit=u, **sel).item()
-            pref = tuning["preferred_direction"].sel(unit=u, **sel).item()
-            title += f"  R={length:.2f} {np.degrees(pref):.0f}\N{DEGREE SIGN}"
-        ax.set_title(title, fontsize=7)
-        ax.set_xticks(np.radians([0, 90, 180, 270]))
-        ax.tick_params(labelsize=6)
-    for ax in list(axes.flat)[curves.sizes["unit"]:]:
+        colour = f"C{regions.index(curves['region'].sel(unit=u).item()) % 10}" \
+            if regions else "C0"
+        ax.plot(closed, np.r_[r, r[:1]], lw=1, color=colour)
+        title = _unit_name(curves, u)
+        if stats is not None:
+            length = stats["mean_vector_length"].sel(unit=u).item()
+            pref = np.degrees(stats["preferred_direction"].sel(unit=u).item()) % 360
+            title += f"\nR = {length:.2f}, pref {pref:.0f}\N{DEGREE SIGN}"
+        ax.set_title(title, fontsize=7, linespacing=1.1, pad=9)
+        ax.set_xticks(np.radians([0, 90, 180, 270]),
+                      [f"{d}\N{DEGREE SIGN}" for d in (0, 90, 180, 270)])
+        ax.tick_params(axis="x", labelsize=6, pad=-1)
+        if np.isfinite(r).any() and np.nanmin(r) >= 0 and np.nanmax(r) > 0:
+            # r from 0, so the curve's shape is not distorted; the outer ring is the peak
+            peak = float(np.nanmax(r))
+            ax.set_ylim(0, peak)
+            ax.set_yticks([peak / 2, peak], ["", f"{_num(peak)}{units_txt}"])
+        ax.tick_params(axis="y", labelsize=6)
+        ax.set_rlabel_position(45)
+        ax.grid(lw=0.4)
+    for ax in axes[n:]:
         ax.axis("off")
-    fig.suptitle(f"{_label(curves)} vs {_label(curves['direction'])}", fontsize=9)
-    fig.tight_layout()
+    title = (f"{_label(curves)} vs {curves['direction'].attrs.get('long_name', 'direction')}"
+             f" (\N{DEGREE SIGN})")
+    if group_dim is not None:
+        title += f" \N{EM DASH} {group_dim} {label}"
+    if stats is not None:
+        title += "\nR: mean vector length; pref: preferred direction"
+    fig.suptitle(title, fontsize=8)
     return fig
 
 
@@ -171,13 +418,17 @@ def cumulative(values, *, xlabel="", title="", ax=None):
     ----------
     values : dict of label -> array, or a DataArray (one line)
         NaNs are left out (and counted in the legend).
+    ax : matplotlib Axes, optional
+        Draw into this axes (default: a new figure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
-    plt = _plt()
     if isinstance(values, xr.DataArray):
         xlabel = xlabel or _label(values)
         values = {values.name or "values": values.values}
-    fig = ax.figure if ax is not None else plt.subplots(figsize=(4, 3))[0]
-    ax = ax or fig.axes[0]
+    fig, ax = _one_axes(ax, (4, 3))
     for label, v in values.items():
         v = np.asarray(v, float).ravel()
         ok = np.sort(v[np.isfinite(v)])
@@ -193,34 +444,35 @@ def cumulative(values, *, xlabel="", title="", ax=None):
     if title:
         ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7, frameon=False)
-    fig.tight_layout()
     return fig
 
 
-def remapping_cdf(sim):
+def remapping_cdf(sim, *, ax=None):
     """Cumulative distributions of trial-pair similarity: same vs different environment,
-    and the label-permuted control."""
+    and the label-permuted control (dashed). Returns the figure."""
     s = sim["similarity"]
     same, perm = sim["same_environment"].values, sim["same_environment_permuted"].values
     groups = {"same environment": s.values[same], "different environment": s.values[~same],
               "same (labels permuted)": s.values[perm],
               "different (labels permuted)": s.values[~perm]}
-    fig = cumulative(groups, xlabel=_label(s), title="remapping")
-    for line in fig.axes[0].get_lines()[2:]:
+    fig = cumulative(groups, xlabel=_label(s), title="remapping", ax=ax)
+    ax = ax or fig.axes[0]
+    for line in ax.get_lines()[2:]:
         line.set_linestyle("--")
-    fig.axes[0].legend(fontsize=7, frameon=False)
+    ax.legend(fontsize=7, frameon=False)
     return fig
 
 
-def error_curves(err, *, variables=("euclidean", "radial", "angular")):
+def error_curves(err, *, variables=("euclidean", "radial", "angular"), fig=None,
+                 axes=None):
     """Localization error vs time in trial (mean +- s.e.m. over trials), one panel per
-    kind of error, one line per estimate."""
-    plt = _plt()
+    kind of error, one line per estimate. ``fig`` / ``axes`` as for
+    :func:`ratemap_grid`; returns the figure."""
     variables = [v for v in variables if v in err]
-    fig, axes = plt.subplots(1, len(variables), figsize=(3.4 * len(variables), 2.8),
-                             squeeze=False)
+    fig, axes = _panels(len(variables), max_cols=len(variables), panel=2.8, fig=fig,
+                        axes=axes, what="kind of error")
     t = err["trial_time"].values
-    for ax, name in zip(axes[0], variables):
+    for ax, name in zip(axes, variables):
         da = err[name]
         if "estimate" in da.dims:
             lines = da.transpose("estimate", "trial_time")
@@ -237,15 +489,13 @@ def error_curves(err, *, variables=("euclidean", "radial", "angular")):
         ax.set_xlabel(_label(err["trial_time"]))
         ax.set_ylabel(_label(da))
     if "estimate" in err.dims:
-        axes[0, 0].legend(fontsize=7, frameon=False)
-    fig.tight_layout()
+        axes[0].legend(fontsize=7, frameon=False)
     return fig
 
 
-def accuracy_curve(acc):
-    """Classification accuracy vs time in trial, with chance level."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(4, 3))
+def accuracy_curve(acc, *, ax=None):
+    """Classification accuracy vs time in trial, with chance level. Returns the figure."""
+    fig, ax = _one_axes(ax, (4, 3))
     t = acc["trial_time"].values
     ax.plot(t, acc["accuracy"].values, label="accuracy")
     if "accuracy_sem" in acc:
@@ -260,14 +510,14 @@ def accuracy_curve(acc):
     ax.set_ylabel(_label(acc["accuracy"]))
     ax.set_ylim(0, 1.02)
     ax.legend(fontsize=7, frameon=False)
-    fig.tight_layout()
     return fig
 
 
-def correlation_sum(res):
-    """log C(r) vs log r with the scaling range and its slope D, and the local slopes."""
-    plt = _plt()
-    fig, (a, b) = plt.subplots(1, 2, figsize=(7, 3))
+def correlation_sum(res, *, fig=None, axes=None):
+    """log C(r) vs log r with the scaling range and its slope D, and the local slopes.
+    ``fig`` / ``axes`` (two) as for :func:`ratemap_grid`; returns the figure."""
+    fig, axes = _panels(2, max_cols=2, panel=3.0, fig=fig, axes=axes, what="panel")
+    a, b = axes[:2]
     x = res["log_r"].values
     a.plot(x, res["log_c"].values, ".", ms=2)
     b.plot(x, res["local_slope"].values, lw=1)
@@ -282,61 +532,110 @@ def correlation_sum(res):
     a.set_ylabel(_label(res["log_c"]))
     b.set_xlabel(_label(res["log_r"]))
     b.set_ylabel(_label(res["local_slope"]))
-    fig.tight_layout()
     return fig
 
 
-def scatter(x, y, *, title=""):
-    """Scatter of two per-unit measures, labelled from their attrs."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(3.6, 3.2))
+def scatter(x, y, *, title="", ax=None):
+    """Scatter of two per-unit measures, labelled from their attrs. Returns the figure."""
+    fig, ax = _one_axes(ax, (3.6, 3.2))
     ax.plot(x.values, y.values, "o", ms=3, alpha=0.7)
     ax.set_xlabel(_label(x))
     ax.set_ylabel(_label(y))
     if title:
         ax.set_title(title, fontsize=9)
-    fig.tight_layout()
     return fig
 
 
-def _bars(da, title=""):
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(3.2, 2.8))
+def bars(da, *, title="", ax=None):
+    """Bar chart of a 1-D result, one bar per entry of its dim. Returns the figure."""
+    fig, ax = _one_axes(ax, (3.2, 2.8))
     labels = [str(v) for v in da[da.dims[0]].values]
     ax.bar(labels, da.values)
     ax.set_xlabel(da.dims[0])
     ax.set_ylabel(_label(da))
     if title:
         ax.set_title(title, fontsize=9)
-    fig.tight_layout()
+    return fig
+
+
+def class_fractions(cells, *, ax=None):
+    """Fraction of units in each cell class (one bar per class, in the precedence order
+    of :func:`hippo_probe.classify_cells`, then unclassified), side by side per
+    ``region`` when the result has one; each bar is labelled with its count.
+
+    Parameters
+    ----------
+    cells : xarray.Dataset
+        Output of :func:`hippo_probe.classify_cells`.
+    ax : matplotlib Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    labels = cells["cell_class"].values.astype(str)
+    order = [c for c in cells["cell_class"].attrs.get("precedence", []) if c in labels]
+    order += sorted(set(labels) - set(order) - {"unclassified"})
+    order += ["unclassified"] if "unclassified" in labels else []
+    if "region" in cells.coords and cells["region"].dims == ("unit",):
+        region = cells["region"].values.astype(str)
+        groups = {g: region == g for g in dict.fromkeys(region)}
+    else:
+        groups = {"all units": np.ones(labels.size, bool)}
+    fig, ax = _one_axes(ax, (max(3.2, 0.55 * len(order) * max(1, len(groups)) + 1.2), 3.0))
+    width = 0.8 / len(groups)
+    pos = np.arange(len(order))
+    for k, (name, member) in enumerate(groups.items()):
+        counts = np.array([(labels[member] == c).sum() for c in order])
+        total = max(int(member.sum()), 1)
+        rects = ax.bar(pos + (k - (len(groups) - 1) / 2) * width, counts / total, width,
+                       label=f"{name} (n={int(member.sum())})")
+        ax.bar_label(rects, labels=[str(c) if c else "" for c in counts], fontsize=6,
+                     padding=1)
+    ax.set_xticks(pos, [c.replace("_", " ") for c in order], rotation=30, ha="right",
+                  fontsize=7)
+    ax.set_ylabel("fraction of units")
+    ax.set_ylim(0, 1.1)
+    ax.set_title(f"cell classes ({labels.size} units)", fontsize=9)
+    if len(groups) > 1 or "region" in cells.coords:
+        ax.legend(fontsize=7, frameon=False, loc="upper left")
     return fig
 
 
 def plot_result(result, **kwargs):
-    """The natural plot of any hippo_probe result (dispatch on ``attrs['analysis']``)."""
+    """The natural plot of any hippo_probe result (dispatch on ``attrs['analysis']``).
+
+    Keyword arguments go to the specific helper: ``ax=`` for single-axes plots,
+    ``fig=`` / ``axes=`` for grids; every helper returns the figure it drew into.
+    """
     kind = result.attrs.get("analysis")
     if kind == "ratemaps":
         return ratemap_grid(result, **kwargs)
+    if kind == "spatial_autocorrelation":
+        return autocorrelation_grid(result, **kwargs)
     if kind == "head_direction_tuning":
         return hd_polar(result, **kwargs)
+    if kind == "classify_cells":
+        return class_fractions(result, **kwargs)
     if kind == "remapping_similarity":
-        return remapping_cdf(result)
+        return remapping_cdf(result, **kwargs)
     if kind == "localization_error":
         return error_curves(result, **kwargs)
     if kind == "classification_accuracy":
-        return accuracy_curve(result)
+        return accuracy_curve(result, **kwargs)
     if kind == "correlation_dimension":
-        return correlation_sum(result)
+        return correlation_sum(result, **kwargs)
     if kind == "context_cells":
         rho = result.attrs.get("rank_correlation", np.nan)
         return scatter(result["spatial_selectivity"], result["projection_strength"],
-                       title=f"Spearman rho = {rho:.2f}")
+                       title=f"Spearman rho = {rho:.2f}", **kwargs)
     if kind == "decode_covariance":
-        return _bars(result["r2"], title=f"decoding {result.attrs.get('target', '')}")
+        return bars(result["r2"], title=f"decoding {result.attrs.get('target', '')}",
+                    **kwargs)
     per_unit = {"spatial_information": "information", "spatial_selectivity": "selectivity",
                 "place_field_stability": "stability"}
     if kind in per_unit:
-        return cumulative(result[per_unit[kind]], title=kind.replace("_", " "))
+        return cumulative(result[per_unit[kind]], title=kind.replace("_", " "), **kwargs)
     raise ValueError(f"no hippo_probe plot for a result with attrs['analysis'] = {kind!r}; "
                      "expected the output of a hippo_probe analysis")
 

@@ -1,140 +1,14 @@
 """Figure 5: what the population encodes beyond position.
 
-A the particle filter's posterior covariance (Cxx, Cyy, Cxy) decoded linearly from the
-localization network's hidden units (cross-validated by trial); B the specialized
-network's posterior over the 100 arenas at a few moments early in a trial, and the mean
-probability it gives the true arena vs time; C the
-correlation dimension of each network's hidden-state trajectories.
+A thin entry point: the figure is built by :mod:`hippo_probe.paper.fig5` (its
+``make(config, out)``), as ``hippo-probe figures --only fig5`` does.
 
     python paper_figures/fig5.py [--size tiny|full|paper] [--out figures/]
 """
 
-import matplotlib.pyplot as plt
-import numpy as np
-import xarray as xr
+from _common import parse_args
 
-import hippo_probe as hp
-
-try:
-    from . import _common as C
-except ImportError:
-    import _common as C
-
-SNAPSHOTS_S = (2.0, 10.0, 30.0, 80.0)
-
-
-def _r2_time_alone(truth, trial_time):
-    """Leave-one-trial-out R² of a predictor that knows only the time in trial (the mean
-    of the other trials at that time): the control for decoding, since the posterior
-    shrinks predictably as a trial goes on."""
-    ok = np.isfinite(truth)
-    truth, trial_time = truth[ok], trial_time[ok]
-    _, group = np.unique(trial_time, return_inverse=True)
-    n = np.bincount(group)
-    total = np.bincount(group, truth)
-    keep = n[group] > 1
-    others = (total[group] - truth)[keep] / (n[group] - 1)[keep]
-    truth = truth[keep]
-    return float(1 - np.sum((truth - others) ** 2) / np.sum((truth - truth.mean()) ** 2))
-
-
-def _true_class_probability(rec):
-    """Mean over trials of the probability given to each sample's true arena, vs time."""
-    env_ids = rec.environment_id.values
-    column = np.searchsorted(env_ids, rec.environment.values)
-    p = rec.class_probability.values[np.arange(rec.sizes["time"]), column]
-    p = xr.DataArray(p, dims="time", coords={"trial_time": ("time", rec.trial_time.values)})
-    return p.groupby("trial_time").mean()
-
-
-def make(cfg, out):
-    numbers = {}
-    loc = C.recording("localization", cfg)
-    spec = C.recording("specialized", cfg)
-    gen = C.recording("generalized", cfg)
-    fig, ax = plt.subplots(2, 4, figsize=(15, 7), constrained_layout=True)
-
-    dec = hp.decode_covariance(loc, n_folds=min(5, loc.sizes["trial_id"]))
-    for k, comp in enumerate(["xx", "yy", "xy"]):
-        a = ax[0, k]
-        truth = loc.pf_cov.sel(cov=comp).values
-        pred = dec.prediction.sel(cov=comp).values
-        ok = np.isfinite(truth) & np.isfinite(pred)
-        step = max(ok.sum() // 4000, 1)
-        # coloured by time in trial: the prior's broad covariance sits at the trial start
-        dots = a.scatter(truth[ok][::step], pred[ok][::step], s=2, alpha=0.4,
-                         c=loc.trial_time.values[ok][::step], cmap="viridis")
-        lim = [np.nanmin(truth), np.nanmax(truth)]
-        a.plot(lim, lim, color="tab:red", lw=0.8, label="identity")
-        a.legend(frameon=False, fontsize=7, loc="upper left")
-        r2 = float(dec.r2.sel(cov=comp))
-        r2_time = _r2_time_alone(truth, loc.trial_time.values)
-        a.set_title(f"A  C{comp} (localization network): cross-validated R² = {r2:.2f}\n"
-                    f"(time in trial alone: R² = {r2_time:.2f})", fontsize=9)
-        numbers.setdefault("A_r2_time_in_trial_alone", {})[comp] = r2_time
-        a.set_xlabel(f"particle filter C{comp} (m²)")
-        a.set_ylabel("decoded from units (m²)")
-        numbers.setdefault("A_r2", {})[comp] = r2
-    fig.colorbar(dots, ax=ax[0, 2], label="time in trial (s)", shrink=0.8)
-
-    trial = spec.trial_id.values[0]
-    one = hp.select_trials(spec, trials=[trial])
-    true_env = int(one.trial_environment.values[0])
-    a = ax[0, 3]
-    for t in SNAPSHOTS_S:
-        k = int(round(t / spec.attrs["dt"])) - 1
-        p = one.class_probability.isel(time=k).values
-        a.plot(one.environment_id.values, p, lw=0.9, label=f"t = {t:g} s")
-        numbers.setdefault("B_true_class_probability", {})[f"{t:g}s"] = float(p[true_env])
-    a.axvline(true_env, color="k", ls=":", lw=0.8, label="true arena")
-    a.set_xlabel("arena id")
-    a.set_ylabel("network posterior")
-    a.set_title("B  arena posterior, one trial", fontsize=9)
-    a.legend(frameon=False, fontsize=7)
-
-    for k, (name, rec) in enumerate((("localization", loc), ("generalized", gen),
-                                     ("specialized", spec))):
-        # C(r) of high-dimensional sets rises steeply: see DIMENSION_C_RANGE
-        res = hp.correlation_dimension(rec, max_points=cfg.dimension_samples,
-                                       c_range=C.DIMENSION_C_RANGE)
-        a = ax[1, k]
-        a.plot(res.log_r, res.log_c, color="k")
-        lo, hi = np.log10(res.attrs["r_min"]), np.log10(res.attrs["r_max"])
-        a.axvspan(lo, hi, color="tab:blue", alpha=0.15, label="scaling range")
-        a.set_xlabel("log10 r")
-        a.set_ylabel("log10 C(r)")
-        a.set_title(f"C  {name}: D = {res.attrs['dimension']:.2f} "
-                    f"({res.attrs['n_points']:,} states)", fontsize=9)
-        # the local slope: a plateau at D over the scaling range is what makes D a dimension
-        slope = a.twinx()
-        finite = np.isfinite(res.log_c.values)
-        lr, lc = res.log_r.values[finite], res.log_c.values[finite]
-        slope.plot(lr, np.gradient(lc, lr), color="tab:orange", lw=0.9,
-                   label="local slope")
-        d = res.attrs["dimension"]
-        if np.isfinite(d):
-            slope.axhline(d, color="tab:orange", ls=":", lw=0.8)
-        slope.set_ylim(0, 1.5 * d if np.isfinite(d) and d > 1 else 12)
-        slope.set_ylabel("d log C / d log r", color="tab:orange")
-        handles = a.get_legend_handles_labels()
-        extra = slope.get_legend_handles_labels()
-        a.legend(handles[0] + extra[0], handles[1] + extra[1], frameon=False, fontsize=7,
-                 loc="upper left")
-        numbers.setdefault("C_dimension", {})[name] = float(res.attrs["dimension"])
-        numbers.setdefault("C_n_points", {})[name] = int(res.attrs["n_points"])
-    a = ax[1, 3]
-    p_true = _true_class_probability(spec)
-    a.plot(p_true.trial_time, p_true, color="k", label="network")
-    a.axhline(1 / spec.sizes["environment_id"], color="gray", ls=":", label="chance")
-    a.set_xlabel("time in trial (s)")
-    a.set_ylabel("posterior of the true arena")
-    a.set_title(f"B (cont.)  mean over {spec.sizes['trial_id']} trials", fontsize=9)
-    a.legend(frameon=False, fontsize=7)
-    numbers["B_mean_true_class_probability_end"] = float(p_true[-1])
-    fig.suptitle("Fig. 5 — uncertainty, arena identity and dimensionality in the population")
-    C.save(fig, "fig5", numbers, cfg, out)
-    return numbers
-
+from hippo_probe.paper import fig5
 
 if __name__ == "__main__":
-    make(*C.parse_args(__doc__.splitlines()[0]))
+    fig5.make(*parse_args(__doc__.splitlines()[0]))

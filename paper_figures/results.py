@@ -1,220 +1,18 @@
 """Write paper_figures/RESULTS.md: each quantitative claim of the study beside our value.
 
-Reads the JSON files the figure scripts wrote (``figures/fig*.json``).
+Reads the JSON files the figure scripts wrote (``figures/fig*.json``). A thin entry point
+over :func:`hippo_probe.paper.results.write_results`, which ``hippo-probe figures`` calls.
 
     python paper_figures/results.py [--figures figures/] [--out paper_figures/RESULTS.md]
 """
 
 import argparse
-import json
-import math
-import re
+import sys
 from pathlib import Path
 
+from hippo_probe.paper.results import write_results
+
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _get(d, *keys):
-    for k in keys:
-        if not isinstance(d, dict) or k not in d:
-            return None
-        d = d[k]
-    return d
-
-
-def _fmt(x, spec=".2f"):
-    return "n/a" if x is None else format(x, spec)
-
-
-def _verdict(ok, partly=False, rule=""):
-    """A claim's verdict by a stated rule (the rules are ours: the paper gives no
-    tolerances)."""
-    word = "reproduced" if ok else ("partly" if partly else "not reproduced")
-    return f"{word} ({rule})" if rule else word
-
-
-def _ratio(a, b):
-    return None if a is None or b is None or b == 0 else a / b
-
-
-def rows(fig):
-    """(claim, paper, this project, verdict) for every quantitative claim of the study."""
-    f2, f3, f4, f5 = (fig.get(k, {}) for k in ("fig2", "fig3", "fig4", "fig5"))
-    n2, n3 = f2.get("n_trials"), f3.get("size", {}).get("trials")
-    slam_n = f3.get("size", {}).get("slam_trials")
-
-    pf_loc = _get(f2, "summary", "particle filter (oracle)", "200s")
-    net_loc = _get(f2, "summary", "network", "200s")
-    r = _get(f2, "summary", "network / PF error, t > 100 s")
-    yield ("Fig. 2: the localization network is about as good as the optimal (oracular) "
-           "particle filter in its familiar arena",
-           "network ≈ PF",
-           f"network / PF error (mean over t > 100 s) = {_fmt(r)}; at 200 s: network "
-           f"{_fmt(net_loc, '.3f')} m, PF {_fmt(pf_loc, '.3f')} m ({n2} test trials)",
-           _verdict(r is not None and r <= 1.2, r is not None and r <= 2,
-                    "ratio ≤ 1.2; partly ≤ 2"))
-
-    gen = _get(f3, "A_generalized_error") or {}
-    r = _get(f3, "A_ratio_network_to_pf_t_gt_100s")
-    net_200 = (gen.get("network") or [None])[-1]
-    pi_200 = (gen.get("path integration") or [None])[-1]
-    beats_pi = None if net_200 is None or pi_200 is None else net_200 < 0.75 * pi_200
-    yield ("Fig. 3A: in novel arenas the generalized network is within ~1.5x of the "
-           "oracular PF and far better than path integration",
-           "≈ 1.5x PF (read from the main text); << PI",
-           f"network / PF error (t > 100 s) = {_fmt(r)}; at 200 s: network "
-           f"{_fmt(net_200, '.3f')} m, PF "
-           f"{_fmt((gen.get('particle filter (oracle)') or [None])[-1], '.3f')} m, PI "
-           f"{_fmt(pi_200, '.3f')} m, naive Bayes "
-           f"{_fmt((gen.get('naive Bayes') or [None])[-1], '.3f')} m ({n3} trials)",
-           _verdict(bool(beats_pi) and r is not None and r <= 2, bool(beats_pi),
-                    "ratio ≤ 2 and error < 0.75 PI at 200 s; partly: only the latter"))
-
-    acc = _get(f3, "C_accuracy_at") or {}
-    a200 = acc.get("200s")
-    yield ("Fig. 3C: the specialized network identifies its arena (of 100) with accuracy "
-           "near 100% within 200 s",
-           "≈ 100% by 200 s",
-           "accuracy at 50/100/200 s = " + (", ".join(_fmt(v, ".3f") for v in acc.values())
-                                             if acc else "n/a") + f" (chance 0.01; {n3} trials)",
-           _verdict(a200 is not None and a200 >= 0.9, a200 is not None and a200 >= 0.5,
-                    "≥ 0.9 at 200 s; partly ≥ 0.5"))
-
-    ro = _get(f3, "F_readout_accuracy_at") or {}
-    r200 = ro.get("200s")
-    yield ("Fig. 3F: retraining only the readout of the generalized network classifies "
-           "the arenas at about 85%",
-           "≈ 85%",
-           "accuracy at 50/100/200 s = " + (", ".join(_fmt(v) for v in ro.values())
-                                             if ro else "n/a") + f" ({n3} trials)",
-           _verdict(r200 is not None and r200 >= 0.7, r200 is not None and r200 >= 0.3,
-                    "≥ 0.7 at 200 s; partly ≥ 0.3"))
-
-    slam = sorted((int(k.split("_")[2]), v) for k, v in f3.items()
-                  if k.startswith("E_pfslam_"))
-    slam_err = {int(k.split("_")[2]): v for k, v in f3.items() if k.startswith("D_pfslam_")}
-    slam_txt = "; ".join(f"{n:,} particles: accuracy {_fmt(v.get('200s'))}, error "
-                         f"{_fmt(slam_err.get(n, {}).get('200s'), '.3f')} m"
-                         for n, v in slam)
-    # 180-200 s means on the PF-SLAM trials: 50 trials make single-sample accuracies
-    # move in steps of 0.02
-    net = _get(f3, "last20s_network_on_slam_trials") or {}
-    top = _get(f3, f"last20s_pfslam_{slam[-1][0]}") if slam else None
-    acc_ok = bool(net and top) and net["accuracy"] >= 0.8 * top["accuracy"]
-    err_ok = bool(net and top) and net["error"] <= 1.25 * top["error"]
-    yield ("Fig. 3D-E: the specialized network is comparable to a PF-SLAM with 10,000 "
-           "particles",
-           "≈ PF-SLAM 10k",
-           f"mean over 180-200 s, on {slam_n} trials — network: accuracy "
-           f"{_fmt(net.get('accuracy'))}, error {_fmt(net.get('error'), '.3f')} m; "
-           f"PF-SLAM 10k: accuracy {_fmt((top or {}).get('accuracy'))}, error "
-           f"{_fmt((top or {}).get('error'), '.3f')} m. At 200 s: PF-SLAM {slam_txt or 'n/a'}",
-           _verdict(acc_ok and err_ok, acc_ok or err_ok,
-                    "accuracy ≥ 0.8 × and error ≤ 1.25 × PF-SLAM 10k's; partly: one of "
-                    "the two"))
-
-    dims = {k: v for k, v in (_get(f5, "C_dimension") or {}).items() if v is not None}
-    # the study's text: "The localization-only network has a dimension D=5.5 ... the
-    # specialized network states ... D=5.6. The generalized network states ... D=8.5."
-    paper = {"localization": 5.5, "specialized": 5.6, "generalized": 8.5}
-    close = [abs(dims[k] / v - 1) <= 0.2 for k, v in paper.items() if k in dims]
-    ordered = bool(dims) and max(dims, key=dims.get) == max(paper, key=paper.get)
-    n_dim = min((_get(f5, "C_n_points") or {}).values(), default=None)
-    bound = 2 * math.log10(n_dim) if n_dim else None
-    yield ("Fig. 5C: correlation dimension of the hidden-state trajectories",
-           "5.5 / 5.6 / 8.5 (localization / specialized / generalized, the study's text)",
-           (" / ".join(f"{k} {_fmt(v, '.1f')}" for k, v in dims.items()) or "n/a")
-           + (f" ({n_dim:,} states each; values near 2 log10 N = {bound:.1f} "
-              "(Eckmann & Ruelle 1992) are lower bounds)" if bound else ""),
-           _verdict(bool(close) and all(close), ordered,
-                    "each within 20%; partly: the generalized network highest"))
-
-    r2 = _get(f5, "A_r2") or {}
-    r2_t = _get(f5, "A_r2_time_in_trial_alone") or {}
-    gain = [r2[k] - r2_t.get(k, 0.0) for k in ("xx", "yy") if k in r2]
-    yield ("Fig. 5A: the PF's posterior covariance is linearly decodable from the "
-           "localization network's units",
-           "decodable",
-           "cross-validated R² (xx, yy, xy) = " + ", ".join(_fmt(v) for v in r2.values())
-           + ("; from time in trial alone: " + ", ".join(_fmt(v) for v in r2_t.values())
-              if r2_t else ""),
-           _verdict(bool(gain) and min(r2.get("xx", 0), r2.get("yy", 0)) >= 0.5
-                    and min(gain) >= 0.1,
-                    any(r2[k] - r2_t.get(k, 0.0) >= 0.05 for k in r2),
-                    "R² ≥ 0.5 for xx and yy, ≥ 0.1 above time in trial alone; partly: "
-                    "≥ 0.05 above it for one component"))
-
-    rho, p = _get(f4, "E", "rank_correlation"), _get(f4, "E", "rank_correlation_p")
-    yield ("Fig. 4E: units projecting strongly onto the classifier are less spatially "
-           "selective (negative correlation)",
-           "negative",
-           f"Spearman rho = {_fmt(rho)} (p = {_fmt(p, '.2g')})",
-           _verdict(rho is not None and rho < 0 and p is not None and p < 0.05,
-                    rho is not None and rho < 0, "rho < 0 with p < 0.05; partly: rho < 0"))
-
-    mvl = _get(f4, "C_mean_vector_length", "median_all_units")
-    sig = _get(f4, "C_mean_vector_length", "fraction_significant_p_lt_0.01")
-    yield ("Fig. 4C: head-direction tuning is weak",
-           "weak",
-           f"specialized network: median mean vector length {_fmt(mvl)}, max "
-           f"{_fmt(_get(f4, 'C_mean_vector_length', 'max'))}; "
-           f"{_fmt(sig)} of units significant (p < 0.01, time-shift shuffles): tuned, "
-           "but weakly (mouse ADn cells: median R 0.84, see the network-vs-rodent table)",
-           _verdict(mvl is not None and mvl < 0.2, rule="median R < 0.2"))
-
-    same_a, same_b = (_get(f4, k, "stability_same_arena_median") for k in "AB")
-    across_a, across_b = (_get(f4, k, "correlation_across_arenas_median") for k in "AB")
-    yield ("Fig. 4A-B: place fields are stable across trajectories in the same arena",
-           "stable",
-           f"median rate-map correlation, same arena vs other arena: specialized "
-           f"{_fmt(same_a)} vs {_fmt(across_a)}, generalized {_fmt(same_b)} vs "
-           f"{_fmt(across_b)}",
-           _verdict(same_a is not None and same_a >= 0.7 and (same_b or 0) >= 0.7
-                    and across_a is not None and same_a - across_a >= 0.1,
-                    same_a is not None and same_a >= 0.7,
-                    "same-arena median ≥ 0.7 and ≥ 0.1 above the other arena's for the "
-                    "specialized network; partly: stable only. Smooth gradient-like maps "
-                    "are stable trivially (notes)"))
-
-    d = _get(f4, "D_similarity") or {}
-    dc = _get(f4, "D_similarity_units_centred") or {}
-    within, across = dc.get("same"), dc.get("different")
-    # global remapping = units' maps unrelated across arenas, not only the population
-    # vectors: the per-unit rate-map correlation across arenas (Fig. 4A) must be low too
-    pv_ok = across is not None and within is not None and across < 0.3 and within > 0.7
-    maps_ok = across_a is not None and across_a < 0.5
-    yield ("Fig. 4D: global remapping between arenas",
-           "across ≈ 0, within high",
-           f"mean population-vector correlation, each unit's mean removed: within "
-           f"{_fmt(within)}, across {_fmt(across)} (labels shuffled: "
-           f"{_fmt(dc.get('same_permuted'))} / {_fmt(dc.get('different_permuted'))}); "
-           f"pooled without centring: {_fmt(d.get('same'))} / {_fmt(d.get('different'))}; "
-           f"but single units' rate maps across arenas correlate {_fmt(across_a)} (median)",
-           _verdict(pv_ok and maps_ok, pv_ok,
-                    "population vectors across < 0.3 and within > 0.7, and units' maps "
-                    "across arenas < 0.5; partly: population vectors only, i.e. rate "
-                    "remapping (units change their mean rate by arena, keep their map)"))
-
-
-def error_table(fig):
-    """Markdown rows: each network's mean Euclidean error at 50 / 100 / 200 s beside the
-    baselines' on the same test trials (Fig. 2, 3A, 3B)."""
-    cols = ["network", "particle filter (oracle)", "single hypothesis", "path integration",
-            "naive Bayes"]
-    panels = [("localization (familiar 1 m arena, start unknown)", "fig2", "euclidean"),
-              ("generalized (novel 0.33 m arenas)", "fig3", "A_generalized_error"),
-              ("specialized (100 familiar 0.33 m arenas)", "fig3", "B_specialized_error")]
-    lines = ["| network (task) | " + " | ".join(cols) + " |",
-             "| --- |" + " --- |" * len(cols)]
-    for label, f, key in panels:
-        curves, t = _get(fig, f, key), _get(fig, f, "trial_time_s")
-        if not curves or t is None:
-            continue
-        index = [min(range(len(t)), key=lambda i: abs(t[i] - s)) for s in (50, 100, 200)]
-        cells = [" / ".join(f"{curves[c][i]:.3f}" for i in index) if c in curves else "—"
-                 for c in cols]
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
-    return lines
 
 
 def main():
@@ -224,46 +22,10 @@ def main():
     ap.add_argument("--notes", default=str(ROOT / "paper_figures" / "RESULTS_notes.md"),
                     help="hand-written explanations appended to the table")
     a = ap.parse_args()
-    figs = {p.stem: json.loads(p.read_text()) for p in Path(a.figures).glob("fig*.json")}
-    size = next((f["size"]["name"] for f in figs.values()), "?")
-    # the newest figure's record of the shipped networks
-    newest = max(Path(a.figures).glob("fig*.json"), key=lambda p: p.stat().st_mtime,
-                 default=None)
-    nets = (figs[newest.stem].get("networks") if newest else None) or {}
-    lines = ["# The paper's claims beside this project's measurements", "",
-             f"Generated by `python paper_figures/results.py` from the figure data "
-             f"(`figures/fig*.json`, data size `{size}`).", "",
-             "Shipped networks used: " + "; ".join(
-                 f"{k}: {v['steps_done']} of {v['steps_budget']} steps"
-                 f"{'' if v.get('finished') else ' (training not finished)'}"
-                 + (f" after {v['base_network_steps']} steps of the base network "
-                    f"{v.get('base_network') or ''}".rstrip()
-                    if v.get("base_network_steps") else "")
-                 for k, v in nets.items()), "",
-             "| claim (Kanitscheider & Fiete 2017) | paper | this project | verdict (rule) |",
-             "| --- | --- | --- | --- |"]
-    lines += [f"| {c} | {p} | {m} | {v} |" for c, p, m, v in rows(figs)]
-    table = error_table(figs)
-    if len(table) > 2:
-        lines += ["", "Mean Euclidean error (m) at 50 / 100 / 200 s on the same test trials "
-                  f"({_get(figs, 'fig2', 'n_trials')} per network):", "", *table]
-    acc = [(name, _get(figs, "fig3", key)) for name, key in
-           (("specialized network", "C_accuracy_at"),
-            ("generalized network, retrained readout", "F_readout_accuracy_at"))]
-    acc = [(n, a) for n, a in acc if a]
-    if acc:
-        lines += ["", "Arena classification accuracy at 50 / 100 / 200 s (chance 0.01): " +
-                  "; ".join(f"{n} " + " / ".join(f"{a[k]:.2f}" for k in ("50s", "100s", "200s"))
-                            for n, a in acc) + "."]
-    notes = Path(a.notes)
-    if notes.exists():
-        text = notes.read_text()
-        unfilled = sorted(set(re.findall(r"\{[A-Z_]+\}", text)))
-        if unfilled:
-            raise SystemExit(f"{notes} has unfilled placeholders {unfilled}")
-        lines += ["", text]
-    Path(a.out).write_text("\n".join(lines) + "\n")
-    print(f"wrote {a.out}")
+    try:
+        print(f"wrote {write_results(a.figures, a.out, a.notes)}")
+    except (ValueError, FileNotFoundError) as err:
+        sys.exit(f"{Path(__file__).name}: error: {err}")
 
 
 if __name__ == "__main__":

@@ -1,5 +1,7 @@
-"""Every paper-figure script and the network-vs-rodent comparison run end to end on a
-tiny configuration (a handful of trials) from the shipped networks."""
+"""Every paper figure (hippo_probe.paper) and the network-vs-rodent comparison run end to
+end on a tiny configuration (a handful of trials) from the shipped networks, writing only
+under the run's --out; the scripts of paper_figures/ and analyses/ stay thin entry
+points over the package."""
 
 import json
 import subprocess
@@ -11,14 +13,79 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def _git_status():
+    """``git status --porcelain`` of the checkout the tests run from, or None outside one."""
+    try:
+        run = subprocess.run(["git", "status", "--porcelain", "--untracked-files=all"],
+                             capture_output=True, text=True, cwd=ROOT, timeout=60)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return run.stdout if run.returncode == 0 else None
+
+
 @pytest.fixture(scope="module")
-def figures(tmp_path_factory):
+def figures_run(tmp_path_factory):
+    """One tiny run of ``hippo-probe figures`` (the slow part of this module), with the
+    checkout's git status before and after it."""
     out = tmp_path_factory.mktemp("figures")
+    before = _git_status()
     run = subprocess.run([sys.executable, "-m", "hippo_probe.cli", "figures", "--size",
                           "tiny", "--out", str(out)], capture_output=True, text=True,
                          cwd=ROOT, timeout=1200)
     assert run.returncode == 0, run.stderr[-4000:]
-    return out
+    return out, before, _git_status()
+
+
+@pytest.fixture(scope="module")
+def figures(figures_run):
+    return figures_run[0]
+
+
+def test_figures_write_only_under_out(figures_run):
+    """`hippo-probe figures --out DIR` leaves the checkout as it was: the tracked copies
+    (paper_figures/png, RESULTS.md) are refreshed only by --refresh-tracked."""
+    out, before, after = figures_run
+    assert (out / "RESULTS.md").stat().st_size > 1000
+    assert (out / "network_vs_rodent.json").exists()
+    assert (out / "cache" / "paper-tiny").is_dir()       # the cached recordings, under out
+    if before is None:
+        pytest.skip("not a git checkout")
+    assert after == before
+
+
+@pytest.mark.parametrize("extra", [["--size", "tiny"], ["--size", "full"],
+                                   ["--size", "paper", "--only", "fig2"]])
+def test_refresh_tracked_needs_every_figure_at_the_paper_size(tmp_path, capsys, extra):
+    from hippo_probe.cli import main
+
+    out = tmp_path / "out"
+    assert main(["figures", "--refresh-tracked", "--out", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert "--refresh-tracked needs" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()          # refused before any work
+
+
+def test_package_boundary():
+    """The figure builders are the package's: nothing in it reaches into the repository
+    through sys.path, sys.argv or subprocesses."""
+    import hippo_probe.paper.fig2 as fig2
+
+    assert callable(fig2.make)
+    package = ROOT / "hippo_probe"
+    for path in [package / "_main.py", *sorted((package / "paper").glob("*.py"))]:
+        text = path.read_text()
+        for banned in ("sys.path", "sys.argv =", "subprocess"):
+            assert banned not in text, f"{path.relative_to(ROOT)} uses {banned}"
+
+
+def test_results_notes_missing_is_a_clear_error(tmp_path):
+    from hippo_probe.paper.results import write_results
+
+    with pytest.raises(FileNotFoundError, match="missing.md"):
+        write_results(tmp_path, tmp_path / "RESULTS.md", tmp_path / "missing.md")
+    # without notes the table is written all the same (every claim n/a)
+    text = write_results(tmp_path, tmp_path / "RESULTS.md", None).read_text()
+    assert "| claim (Kanitscheider & Fiete 2017)" in text
 
 
 @pytest.mark.parametrize("name", ["fig2", "fig3", "fig4", "fig5"])

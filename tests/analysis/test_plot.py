@@ -2,15 +2,15 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
 
-import hippo_probe as hp  # noqa: E402
-from hippo_probe import plot  # noqa: E402
+import hippo_probe as hp
+from hippo_probe import plot
 
-from .conftest import (  # noqa: E402
+from .conftest import (
     hd_cell_recording,
     place_cell_recording,
     two_environment_recording,
@@ -39,7 +39,8 @@ def test_ratemaps_plot_themselves_with_arena_outline(place):
     outline = panels[0].get_lines()[0].get_xydata()
     np.testing.assert_allclose(np.abs(outline), 0.5)
     assert fig._suptitle.get_text() == "mean activity (Hz)"
-    assert panels[0].get_title().endswith("..0.65")  # each panel: its own range
+    assert panels[0].get_title().endswith("peak 0.65 Hz")  # each panel: its own peak
+    assert fig.axes[-1].get_ylabel() == "mean activity (Hz)"  # a colour bar, 0..peak
     shared = maps.hp.plot(scale="shared")
     assert shared.axes[-1].get_ylabel() == "mean activity (Hz)"  # one colour bar
     assert panels[0].get_xlabel() == "x position (m)"
@@ -61,8 +62,9 @@ def test_hd_polar_titles_carry_r_and_direction():
     res = hp.head_direction_tuning(rec, n_shuffles=0)
     fig = res.hp.plot()
     titles = [ax.get_title() for ax in fig.axes]
-    assert any("R=0." in t for t in titles)
-    assert "head direction (rad)" in fig._suptitle.get_text()
+    assert any("R = 0." in t for t in titles)
+    # the ticks are in degrees, and so is the title
+    assert "head direction (\N{DEGREE SIGN})" in fig._suptitle.get_text()
 
 
 def test_remapping_cumulative_plot():

@@ -1,0 +1,290 @@
+"""Shared machinery of the figure builders: configurations, cached recordings, output.
+
+Every figure reads recordings of the shipped networks (``hippo_probe/pretrained``) with
+the baselines' estimates added, made once and cached under the configuration's cache
+folder (:attr:`FigureConfig.cache`: ``<cache_root>/paper-<size>/``; ``hippo-probe
+figures`` puts it under its ``--out`` unless given ``--cache``). A cached recording is
+reused only if it was made from the same network file and the same configuration (both
+hashed into its attrs); otherwise it is rebuilt.
+
+Files of the repository that are not package data (the NWB test session, the
+hand-written notes of RESULTS.md) are found by :func:`repository_file`: the modules that
+need one take its path as an argument, defaulting to the repository's copy.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+import hippo_probe as hp
+from hippo_probe._atomic import atomic_path
+from hippo_probe.tasks import make_trials, task_config
+
+from ._repository import PACKAGE, REPOSITORY, repository_file  # noqa: F401
+
+
+@dataclass(frozen=True)
+class FigureConfig:
+    """Sizes of the data behind the figures.
+
+    ``full`` (the default) regenerates the figures in minutes on 2 CPU cores; ``tiny``
+    (tests) runs every code path on a handful of trials; ``paper`` is the study's scale
+    (1,000 test trials, PF-SLAM up to 10,000 particles), for the documented rebuild.
+
+    ``cache_root`` is where the cached recordings go (``<cache_root>/paper-<name>/``);
+    it is not part of the figures' numbers (not in their JSON, not in cache keys). Give
+    it with :func:`with_cache`.
+    """
+
+    name: str = "full"
+    trials: int = 200            # test trials per recording
+    particles: int = 1000        # oracular particle filter
+    slam_particles: tuple = (100, 1000, 10000)
+    slam_trials: int = 50         # PF-SLAM at 10,000 particles: ~30 s on 2 cores
+    map_trials: int = 60         # trials of the two-arena recordings (rate maps)
+    remap_trials: int = 400      # specialized trials for remapping / selectivity
+    dimension_samples: int = 20000   # Eckmann-Ruelle: D up to ~2 log10 N = 8.6 resolvable
+    seed: int = 0
+    # the world of the networks and trials: the compass world's networks until the
+    # darkness world's finish training (issue 13); the trials are always of the networks'
+    # world
+    world: str = "compass"
+    cache_root: str | None = field(default=None, repr=False, compare=False)
+
+    def network(self, name: str) -> str:
+        """The shipped network ``name`` (e.g. "generalized") of this world."""
+        if self.world == "darkness":
+            return name
+        task, _, rest = name.partition("_")
+        return f"{task}_{self.world}" + (f"_{rest}" if rest else "")
+
+    @property
+    def cache(self) -> Path:
+        """Folder of this size's cached recordings and arrays."""
+        if self.cache_root is None:
+            raise ValueError("the figures' cache folder is not set: give the configuration "
+                             "one with `with_cache(config, folder)`")
+        return Path(self.cache_root) / f"paper-{self.name}"
+
+    def numbers(self) -> dict:
+        """The configuration as it is written into each figure's JSON."""
+        out = asdict(self)
+        out.pop("cache_root")
+        return out
+
+
+#: Range of the correlation sum searched for the scaling region (fig5). C(r) of
+#: high-dimensional sets is steep: half a decade of r (the analysis' default shortest
+#: scaling range) spans 4+ decades of C once D > 8, so the search goes down to C = 1e-6
+#: (200 pairs among the 20,000 points of the full size).
+DIMENSION_C_RANGE = (1e-6, 0.1)
+
+CONFIGS = {
+    "full": FigureConfig(),
+    "tiny": FigureConfig(name="tiny", trials=4, particles=50, slam_particles=(100, 200),
+                         slam_trials=2, map_trials=6, remap_trials=12,
+                         dimension_samples=1500),
+    "paper": FigureConfig(name="paper", trials=1000, slam_trials=100, map_trials=100,
+                          remap_trials=1000, dimension_samples=20000),
+}
+
+
+def with_cache(cfg: FigureConfig, folder) -> FigureConfig:
+    """``cfg`` with its cached recordings under ``folder`` (``folder/paper-<size>/``)."""
+    return replace(cfg, cache_root=str(folder))
+
+
+def cached_under(cfg: FigureConfig, out) -> FigureConfig:
+    """``cfg`` as given if it has a cache folder, else with one under ``out/cache``: a
+    figure builder called with a bare configuration writes only under its ``out``."""
+    return cfg if cfg.cache_root is not None else with_cache(cfg, Path(out) / "cache")
+
+
+# ----------------------------------------------------------------------- networks
+def network_file(name: str) -> Path:
+    from hippo_probe.pretrained import resolve_network_file
+    return resolve_network_file(name)
+
+
+def code_version() -> str:
+    """Hash of the package's sources: a cached recording made by other code is rebuilt."""
+    h = hashlib.sha1()
+    for path in sorted(PACKAGE.rglob("*.py")):
+        h.update(path.read_bytes())
+    return h.hexdigest()[:12]
+
+
+def _digest(*parts) -> str:
+    h = hashlib.sha1()
+    for p in parts:
+        h.update(p if isinstance(p, bytes) else repr(p).encode())
+    return h.hexdigest()[:12]
+
+
+# ----------------------------------------------------------------------- baselines
+def baseline_estimates(batch, which, n_particles: int) -> dict:
+    """Baselines' estimates in the ARENA frame (as recordings hold them), by name.
+
+    ``which`` among "pi", "sh", "nb", "pf". The PF also gives ``pf_cov``.
+    """
+    from hippo_probe import baselines as bl
+
+    to_arena = (lambda e: e + batch.start[None]) \
+        if batch.config.target == "start_relative" else (lambda e: e)
+    out = {}
+    if "pi" in which:
+        out["estimate_pi"] = to_arena(bl.path_integration(batch).estimate)
+    if "sh" in which:
+        out["estimate_sh"] = to_arena(bl.single_hypothesis(batch).estimate)
+    if "nb" in which:
+        out["estimate_nb"] = to_arena(bl.naive_bayes(batch).estimate)
+    if "pf" in which:
+        res = bl.particle_filter(batch, n_particles=n_particles)
+        out["estimate_pf"] = to_arena(res.estimate)
+        out["pf_cov"] = res.cov
+    return out
+
+
+# ----------------------------------------------------------------------- recordings
+RECORDINGS = {
+    # name: (network, task, task-config overrides, baselines, n trials attr)
+    "localization": ("localization", "localization", {}, ("pi", "sh", "pf"), "trials"),
+    "generalized": ("generalized", "generalized", {}, ("pi", "sh", "nb", "pf"), "trials"),
+    "specialized": ("specialized", "specialized", {}, ("pi", "sh", "pf"), "trials"),
+    "specialized_many": ("specialized", "specialized", {}, (), "remap_trials"),
+    "specialized_maps": ("specialized", "specialized", {"n_arenas": 2}, (), "map_trials"),
+    "generalized_maps": ("generalized", "generalized", {"arenas": "fixed", "n_arenas": 2},
+                         (), "map_trials"),
+    "readout": ("generalized_readout", "specialized", {}, (), "trials"),
+}
+
+
+def recording(name: str, cfg: FigureConfig):
+    """A cached recording of the paper's data set ``name`` (see :data:`RECORDINGS`)."""
+    network, task, overrides, which, size_attr = RECORDINGS[name]
+    network = cfg.network(network)
+    n_trials = getattr(cfg, size_attr)
+    net_path = network_file(network)
+    key = _digest(net_path.read_bytes(), name, n_trials, cfg.particles, cfg.seed,
+                  sorted(overrides.items()), which, code_version())
+    path = cfg.cache / f"{name}.zarr"
+    if path.exists():
+        try:
+            rec = hp.open_recording(path)
+            if rec.attrs.get("paper_key") == key:
+                return rec
+        except ValueError:
+            pass            # unreadable or half-written: rebuild it
+    t0 = time.time()
+    net = hp.load_pretrained(net_path)
+    if net.world != cfg.world:
+        raise ValueError(f"network {network!r} is of the {net.world!r} world; the figures "
+                         f"are of the {cfg.world!r} world")
+    config = task_config(task, cfg.world, **overrides)
+    batch = make_trials(task, n_trials, "test", cfg.seed, config=config)
+    extra = baseline_estimates(batch, which, cfg.particles) if which else None
+    rec = hp.record(net, batch, baselines=extra, checkpoint=network, config=config,
+                    session_id=f"paper-{name}")
+    rec.attrs["paper_key"] = key
+    rec.attrs["paper_dataset"] = name
+    cfg.cache.mkdir(parents=True, exist_ok=True)
+    hp.save_recording(rec, path, overwrite=True)
+    print(f"  recorded {name}: {n_trials} trials in {time.time() - t0:.0f} s -> {path}")
+    return hp.open_recording(path)
+
+
+def cached_arrays(name: str, cfg: FigureConfig, make, *key_parts) -> dict:
+    """``make()`` -> dict of arrays, cached as ``<cache>/<name>.npz`` under a key."""
+    key = _digest(name, cfg, *key_parts, code_version())
+    path = cfg.cache / f"{name}.npz"
+    if path.exists():
+        with np.load(path, allow_pickle=False) as f:
+            if str(f["_key"]) == key:
+                return {k: f[k] for k in f.files if k != "_key"}
+    out = make()
+    with atomic_path(path, overwrite=True) as tmp, open(tmp, "wb") as f:
+        np.savez(f, _key=key, **out)
+    return out
+
+
+# ----------------------------------------------------------------------- output
+COLORS = {"network": "k", "estimate": "k", "estimate_pf": "tab:blue",
+          "estimate_sh": "tab:orange", "estimate_pi": "tab:red", "estimate_nb": "tab:green",
+          "estimate_pfslam": "tab:purple"}
+LABELS = {"estimate": "network", "estimate_pf": "particle filter (oracle)",
+          "estimate_sh": "single hypothesis", "estimate_pi": "path integration",
+          "estimate_nb": "naive Bayes", "estimate_pfslam": "PF-SLAM"}
+
+
+def jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        return None if not np.isfinite(obj) else round(float(obj), 6)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    return obj
+
+
+def save(fig, name: str, numbers: dict, cfg: FigureConfig, out: Path) -> None:
+    """Write ``<out>/<name>.png``, ``.pdf`` and ``.json`` (the plotted numbers)."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out / f"{name}.png", dpi=130)
+    fig.savefig(out / f"{name}.pdf")
+    plt.close(fig)
+    payload = {"figure": name, "size": cfg.numbers(), "hippo_probe": hp.__version__,
+               "networks": network_info(), **numbers}
+    (out / f"{name}.json").write_text(json.dumps(jsonable(payload), indent=1))
+    print(f"  wrote {out / name}.png/.pdf/.json")
+
+
+def network_info() -> dict:
+    """Training state of the shipped networks (steps done, finished or not)."""
+    from hippo_probe.pretrained import HERE
+    info = {}
+    for p in sorted(HERE.glob("*.log.json")):
+        log = json.loads(p.read_text())
+        info[p.name.removesuffix(".log.json")] = {
+            "steps_done": log.get("steps_done"), "steps_budget": log["config"]["steps"],
+            "finished": log.get("finished"), "wall_time_s": log.get("wall_time_s"),
+            "base_network_steps": (log.get("base_network") or {}).get("steps_done"),
+            "base_network": (log.get("base_network") or {}).get("init_from")}
+    return info
+
+
+def at_times(time, curve, times=(50.0, 100.0, 200.0)) -> dict:
+    """Values of a curve (over ``time``, s) at the samples nearest given times (s)."""
+    time, curve = np.asarray(time), np.asarray(curve)
+    return {f"{int(t)}s": float(curve[np.argmin(np.abs(time - t))]) for t in times}
+
+
+def window_mean(time, curve, start=180.0, stop=200.0) -> float:
+    """Mean of a curve (over ``time``, s) within ``[start, stop]``: steadier than one
+    sample when few trials make the curve noisy."""
+    time, curve = np.asarray(time), np.asarray(curve, float)
+    return float(np.nanmean(curve[(time >= start) & (time <= stop)]))
+
+
+def step_times(rec) -> np.ndarray:
+    """Times in trial (s) of the network steps, ``dt, 2 dt, ..., T dt``."""
+    n = int(round(float(rec.trial_time.max()) / rec.attrs["dt"]))
+    return rec.attrs["dt"] * np.arange(1, n + 1)
+
+
+def with_size(cfg: FigureConfig, **changes) -> FigureConfig:
+    return replace(cfg, **changes)

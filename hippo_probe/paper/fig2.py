@@ -1,0 +1,53 @@
+"""Figure 2: localization in a familiar arena (mean radius 1 m), start unknown.
+
+Euclidean, radial and angular error vs time in trial of the localization network, the
+oracular particle filter, single hypothesis and path integration, on the test split.
+
+The builder of ``hippo-probe figures --only fig2`` and of the script
+``paper_figures/fig2.py``; contract in :mod:`hippo_probe.paper`.
+"""
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+import hippo_probe as hp
+
+from . import config as C
+
+ESTIMATES = ["estimate", "estimate_pf", "estimate_sh", "estimate_pi"]
+
+
+def make(cfg, out):
+    """Draw the figure into ``out``; returns the numbers written to its JSON."""
+    cfg = C.cached_under(cfg, out)
+    rec = C.recording("localization", cfg)
+    err = hp.localization_error(rec, estimate=ESTIMATES)
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.6), constrained_layout=True)
+    t = err.trial_time.values
+    numbers = {"trial_time_s": t, "n_trials": int(rec.sizes["trial_id"])}
+    for ax, kind in zip(axes, ("euclidean", "radial", "angular")):
+        scale = np.degrees(1) if kind == "angular" else 1.0
+        for name in ESTIMATES:
+            m = err[kind].sel(estimate=name).values * scale
+            s = err[f"{kind}_sem"].sel(estimate=name).values * scale
+            ax.plot(t, m, color=C.COLORS[name], label=C.LABELS[name], lw=1.4)
+            ax.fill_between(t, m - s, m + s, color=C.COLORS[name], alpha=0.15, lw=0)
+            numbers.setdefault(kind, {})[C.LABELS[name]] = m
+        ax.set_xlabel("time in trial (s)")
+        ax.set_ylabel(f"{err[kind].attrs['long_name']} "
+                      f"({'deg' if kind == 'angular' else err[kind].attrs['units']})")
+        ax.set_xlim(0, t[-1])
+        ax.set_ylim(bottom=0)
+    axes[0].legend(frameon=False, fontsize=8)
+    fig.suptitle("Fig. 2 — localization in a familiar arena (mean radius 1 m, start "
+                 "unknown), "
+                 f"{numbers['n_trials']} test trials, mean ± s.e.m.")
+    numbers["summary"] = {
+        C.LABELS[n]: C.at_times(t, err.euclidean.sel(estimate=n).values) for n in ESTIMATES}
+    late = t > 100
+    numbers["summary"]["network / PF error, t > 100 s"] = float(
+        err.euclidean.sel(estimate="estimate").values[late].mean()
+        / err.euclidean.sel(estimate="estimate_pf").values[late].mean())
+    C.save(fig, "fig2", numbers, cfg, out)
+    return numbers
+

@@ -1,0 +1,199 @@
+"""Figure 4: the networks' units recorded like cells.
+
+A-B rate maps of example units measured twice in one arena (two disjoint sets of trials)
+and once in another — A specialized network (familiar arenas), B generalized network
+(novel arenas) — with place-field stability across all units; C head-direction tuning of
+20 units; D cumulative population-vector similarity within vs across environments, with
+the label-shuffled control; E distribution of spatial selectivity and, inset,
+selectivity vs projection strength onto the arena classifier.
+
+The builder of ``hippo-probe figures --only fig4`` and of the script
+``paper_figures/fig4.py``; contract in :mod:`hippo_probe.paper`.
+"""
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+import hippo_probe as hp
+
+from . import config as C
+
+N_EXAMPLES = 4
+BIN = 0.05          # m: 5 cm bins in the 0.33 m arenas
+SIGMA = 1.0         # bins
+
+
+def _three_maps(rec):
+    """Maps of every unit in arena A (first half of its trials), A (second half), B."""
+    env = rec.trial_environment.values
+    ids = rec.trial_id.values
+    arenas = np.unique(env)
+    a, b = arenas[0], arenas[1]
+    in_a = ids[env == a]
+    half = len(in_a) // 2
+    sets = [in_a[:half], in_a[half:], ids[env == b]]
+    v = rec.arena_vertices.sel(environment_id=[a, b]).values.reshape(-1, 2)
+    ext = (v[:, 0].min(), v[:, 0].max(), v[:, 1].min(), v[:, 1].max())   # one grid for all
+    maps = [hp.ratemaps(hp.select_trials(rec, trials=s), bin_size=BIN, sigma=SIGMA,
+                        extent=ext) for s in sets]
+    return maps, (a, b)
+
+
+def _corr(m1, m2, min_bins=5):
+    """Per-unit Pearson correlation of two rate maps over the bins both visited."""
+    from hippo_probe.analysis.place_field_stability import pearson_masked
+    x, y = m1.values.reshape(len(m1.unit), -1), m2.values.reshape(len(m2.unit), -1)
+    return pearson_masked(x, y, min_bins)[0]
+
+
+def _maps_panel(sub, rec, title, numbers, key):
+    maps, (a, b) = _three_maps(rec)
+    same = _corr(maps[0], maps[1])
+    across = _corr(maps[0], maps[2])
+    sel = hp.spatial_selectivity(rec, bin_size=BIN).selectivity
+    sel = sel.max(dim=[d for d in sel.dims if d != "unit"]) if sel.ndim > 1 else sel
+    examples = np.argsort(-np.nan_to_num(sel.values))[:N_EXAMPLES]
+    gs = sub.add_gridspec(N_EXAMPLES, 4, width_ratios=[1, 1, 1, 2.2], wspace=0.05,
+                          hspace=0.1)
+    fig = sub
+    verts = rec.arena_vertices
+    for row, u in enumerate(examples):
+        # one colour scale per unit across its three maps, so A-vs-B differences show
+        imgs = [m.isel(unit=u) for m in maps]
+        lo = min(float(i.min()) for i in imgs)
+        hi = max(float(i.max()) for i in imgs)
+        for col, (img, env) in enumerate(zip(imgs, (a, a, b))):
+            ax = fig.add_subplot(gs[row, col])
+            mesh = ax.pcolormesh(img.x, img.y, (img - lo) / (hi - lo or 1.0),
+                                 shading="nearest", cmap="viridis", vmin=0, vmax=1)
+            v = verts.sel(environment_id=env).values
+            ax.plot(*np.vstack([v, v[:1]]).T, color="k", lw=0.8)
+            ax.set_aspect("equal")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if row == 0:
+                ax.set_title(["arena A, trial set 1", "arena A, trial set 2", "arena B"][col],
+                             fontsize=7)
+            if col == 0:
+                ax.set_ylabel(f"unit {int(rec.unit[u])}", fontsize=7)
+    fig.colorbar(mesh, ax=list(fig.axes), shrink=0.5, pad=0.02,
+                 label="activity, scaled per unit (0 = min, 1 = max)").ax.tick_params(
+                     labelsize=6)
+    ax = fig.add_subplot(gs[:, 3])
+    for values, colour, label in ((same, "k", "A vs A"), (across, "tab:red", "A vs B")):
+        values = np.sort(values[np.isfinite(values)])
+        ax.plot(values, np.arange(1, len(values) + 1) / len(values), color=colour,
+                label=f"{label} (median {np.median(values):.2f})")
+        ax.axvline(np.median(values), color=colour, ls=":", lw=0.8)
+    ax.set_xlabel("rate-map correlation (Pearson)", fontsize=8)
+    ax.set_ylabel("cumulative fraction of units", fontsize=8)
+    ax.legend(frameon=False, fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.set_title("stability across all units", fontsize=9)
+    sub.suptitle(f"{title} (the {N_EXAMPLES} most spatially selective units)", fontsize=10,
+                 x=0.02, ha="left")
+    numbers[key] = {"stability_same_arena_median": float(np.nanmedian(same)),
+                    "correlation_across_arenas_median": float(np.nanmedian(across)),
+                    "example_units": rec.unit.values[examples]}
+
+
+def make(cfg, out):
+    """Draw the figure into ``out``; returns the numbers written to its JSON."""
+    cfg = C.cached_under(cfg, out)
+    numbers = {}
+    spec_maps = C.recording("specialized_maps", cfg)
+    gen_maps = C.recording("generalized_maps", cfg)
+    many = C.recording("specialized_many", cfg)
+
+    fig = plt.figure(figsize=(15, 13), layout="constrained")
+    rows = fig.subfigures(3, 1, height_ratios=[1, 1, 0.85])
+    top = rows[0].subfigures(1, 2, width_ratios=[1.6, 1])
+    mid = rows[1].subfigures(1, 2, width_ratios=[1.6, 1])
+    bottom = rows[2].subfigures(1, 2, width_ratios=[1, 1.6])
+    _maps_panel(top[0], spec_maps, "A  specialized network: rate maps of example units",
+                numbers, "A")
+    _maps_panel(mid[0], gen_maps, "B  generalized network in novel arenas", numbers, "B")
+
+    hd = hp.head_direction_tuning(many, n_bins=60)
+    mvl = hd.mean_vector_length.values.ravel()
+    show = np.argsort(-np.nan_to_num(mvl))[:20]
+    theta = hd.direction.values
+    top[1].suptitle("C  head-direction tuning of the 20 most tuned units (specialized "
+                    "network, 60 bins;\nradius from 0 = the unit's minimum, 0° to the right)",
+                    fontsize=10)
+    for k, u in enumerate(show):
+        ax = top[1].add_subplot(4, 5, k + 1, projection="polar")
+        # the rate R is computed from (curve minus the unit's minimum over the recording),
+        # drawn from zero at the centre: a weakly tuned unit is a nearly round curve
+        r = hd.tuning_curve.isel(unit=u).values - float(hd.rate_offset.isel(unit=u))
+        ax.plot(np.append(theta, theta[0]), np.append(r, r[0]), lw=0.8)
+        ax.set_ylim(0, np.nanmax(r) * 1.05)
+        ax.set_xticks([0, np.pi / 2, np.pi, 3 * np.pi / 2])
+        ax.set_xticklabels([])
+        ax.set_yticks([])
+        ax.set_title(f"{int(many.unit[u])}: R={mvl[u]:.2f}", fontsize=6)
+    numbers["C_mean_vector_length"] = {
+        "median_all_units": float(np.nanmedian(mvl)),
+        "max": float(np.nanmax(mvl)), "shown_units": many.unit.values[show],
+        "fraction_R_gt_0.3": float(np.mean(mvl > 0.3)),
+        "fraction_significant_p_lt_0.01": float(np.mean(hd.p_value.values < 0.01)),
+        "n_shuffles": int(hd.attrs["n_shuffles"])}
+
+    ax = mid[1].add_subplot(1, 1, 1)
+    ax.hist(mvl, bins=30, color="gray")
+    ax.set_xlabel("mean vector length R (from the tuning curve)")
+    ax.set_ylabel("units")
+    ax.set_title("C (cont.)  R of all units (specialized network)\n"
+                 f"{np.mean(hd.p_value.values < 0.01):.0%} significant: p < 0.01 against "
+                 f"{hd.attrs['n_shuffles']} time-shift shuffles", fontsize=9)
+
+    ax = bottom[0].add_subplot(1, 1, 1)
+    colours = {"same": "tab:blue", "different": "tab:orange"}
+    for centred, style in ((False, ":"), (True, "-")):
+        sim = hp.remapping_similarity(many, center_units=centred)
+        s = sim.similarity.values
+        kind = "units centred" if centred else "raw, not centred"
+        for name, mask in (("same", sim.same_environment.values),
+                           ("different", ~sim.same_environment.values)):
+            values = np.sort(s[mask & np.isfinite(s)])
+            if len(values):
+                ax.plot(values, np.arange(1, len(values) + 1) / len(values), ls=style,
+                        color=colours[name], label=f"{name} arena ({kind})")
+        if centred:     # the control: labels permuted, all pairs of the centred measure
+            perm = sim.same_environment_permuted.values
+            values = np.sort(s[perm & np.isfinite(s)])
+            if len(values):
+                ax.plot(values, np.arange(1, len(values) + 1) / len(values), ls="--",
+                        color="gray", label="same arena, labels shuffled (centred)")
+        key = "D_similarity_units_centred" if centred else "D_similarity"
+        numbers[key] = {c: float(sim["mean"].sel(comparison=c))
+                        for c in sim.comparison.values}
+    ax.set_xlabel("population-vector correlation between trials")
+    ax.set_ylabel("cumulative fraction of trial pairs")
+    ax.set_title("D remapping (specialized network); centred: each unit's mean removed",
+                 fontsize=9)
+    ax.legend(frameon=False, fontsize=7)
+
+    ctx = hp.context_cells(many)
+    ax = bottom[1].add_subplot(1, 1, 1)
+    sel = ctx.spatial_selectivity.values
+    ax.hist(sel[np.isfinite(sel)], bins=30, color="tab:blue")
+    ax.set_xlabel("spatial selectivity (variance explained by position)")
+    ax.set_ylabel("units")
+    ax.set_title("E spatial selectivity (specialized network)", fontsize=9)
+    inset = ax.inset_axes([0.6, 0.45, 0.37, 0.5])
+    inset.scatter(ctx.projection_strength, sel, s=4, color="k")
+    inset.set_xlabel("projection strength onto classifier", fontsize=7)
+    inset.set_ylabel("selectivity", fontsize=7)
+    inset.tick_params(labelsize=6)
+    rho = ctx.attrs.get("rank_correlation")
+    p = ctx.attrs.get("rank_correlation_p")
+    inset.text(0.98, 0.97, f"Spearman ρ = {rho:.2f}, p = {p:.2g}, n = {np.isfinite(sel).sum()}",
+               transform=inset.transAxes, ha="right", va="top", fontsize=7)
+    numbers["E"] = {"selectivity_median": float(np.nanmedian(sel)),
+                    "rank_correlation": rho,
+                    "rank_correlation_p": ctx.attrs.get("rank_correlation_p")}
+    fig.suptitle("Fig. 4 — hidden units recorded like cells")
+    C.save(fig, "fig4", numbers, cfg, out)
+    return numbers
+

@@ -1,0 +1,74 @@
+"""The repository's tracked copies of the figures: ``paper_figures/png/*.png`` (shown by
+the README) and ``paper_figures/RESULTS.md``.
+
+They are refreshed only on request (``hippo-probe figures --refresh-tracked``, and
+``hippo-probe main`` at the paper size), from a folder where every figure was just made at
+the paper size, so the repository shows what its own networks give at the study's scale.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from .._atomic import atomic_path
+from ._repository import REPOSITORY
+
+#: Folder of the README's figure copies, inside the repository.
+PNG = "paper_figures/png"
+#: The tracked claims table, inside the repository.
+RESULTS = "paper_figures/RESULTS.md"
+
+
+def check_repository(repository=None) -> Path:
+    """The clone whose tracked copies are refreshed (default: the one the package runs
+    from); raises FileNotFoundError if there is none."""
+    if repository is None:
+        repository = REPOSITORY
+    if repository is None or not (Path(repository) / PNG).is_dir():
+        raise FileNotFoundError(
+            f"the tracked copies ({PNG}/, {RESULTS}) are files of a clone of the "
+            f"hippo_probe repository; none found"
+            + (f" at {repository}" if repository is not None else ""))
+    return Path(repository)
+
+
+def refresh_tracked(out, names, *, repository=None) -> list[Path]:
+    """Copy the figures ``names`` and RESULTS.md just made in ``out`` over the repository's
+    tracked copies.
+
+    Only figures that already have a tracked copy are copied (the README shows a chosen
+    few); RESULTS.md is required.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        Folder of the figures (``<name>.png``) and ``RESULTS.md``.
+    names : iterable of str
+        The figures made in ``out`` by this run (a stale file of an earlier run is never
+        copied).
+    repository : str or os.PathLike, optional
+        The clone whose copies are refreshed; default the one the package runs from.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The tracked files written.
+
+    Raises
+    ------
+    FileNotFoundError
+        No clone of the repository, or ``out`` lacks RESULTS.md.
+    """
+    root, out = check_repository(repository), Path(out)
+    results = out / "RESULTS.md"
+    if not results.is_file():
+        raise FileNotFoundError(f"{results} not found: RESULTS.md is written before the "
+                                f"tracked copies are refreshed")
+    pairs = [(out / f"{name}.png", root / PNG / f"{name}.png") for name in names]
+    pairs = [(new, old) for new, old in pairs if old.exists() and new.exists()]
+    pairs.append((results, root / RESULTS))
+    for new, old in pairs:
+        with atomic_path(old, overwrite=True, what="tracked copy") as tmp:
+            shutil.copyfile(new, tmp)
+    return [old for _, old in pairs]

@@ -189,3 +189,18 @@ def entry_labels(da) -> list[str]:
 
 def _common_coord(da, dim):
     return da[dim].values if dim in da.coords else np.arange(da.sizes[dim])
+
+
+def refuse_map_options(**options):
+    """Options that only act on a recording (map making, shuffles) refused when rate maps
+    are given instead: silently ignoring them would mislead."""
+    given = {k: v for k, v in options.items() if v is not None}
+    if not given:
+        return
+    names = ", ".join(f"`{k}`" for k in given)
+    verb = "applies" if len(given) == 1 else "apply"
+    map_options = [k for k in given if k != "seed"]
+    hint = (f"; pass {', '.join(map_options)} to ratemaps() instead" if map_options else "")
+    raise ValueError(f"{names} only {verb} when a recording is given (the maps are already "
+                     f"made); got rate maps and "
+                     f"{', '.join(f'{k}={v!r}' for k, v in given.items())}{hint}")

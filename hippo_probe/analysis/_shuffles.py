@@ -29,17 +29,6 @@ def shifts_for(rec, n_shuffles, seed):
                                             n_shuffles, seed)].astype(np.int64)
 
 
-def refuse_map_options(**options):
-    """Map-making options only apply to a recording: refuse them with rate maps (as
-    :func:`spatial_information` does)."""
-    given = {k: v for k, v in options.items() if v is not None}
-    if given:
-        raise ValueError(f"{', '.join(f'`{k}`' for k in given)} only apply when a recording "
-                         f"is given (the maps are already made); got rate maps and "
-                         f"{', '.join(f'{k}={v!r}' for k, v in given.items())}. Pass them "
-                         "to ratemaps() instead")
-
-
 def check_percentile(name, value):
     return check_number(name, value, low=0, high=100, low_inclusive=False,
                         high_inclusive=False)

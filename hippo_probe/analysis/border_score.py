@@ -10,7 +10,8 @@ from scipy import optimize
 
 from .._validators import check_number, check_option, check_shape
 from . import _common
-from ._shuffles import MapStack, add_significance, check_percentile, refuse_map_options
+from ._common import refuse_map_options
+from ._shuffles import MapStack, add_significance, check_percentile
 from .config import BORDER, CELL_CLASS
 from .place_fields import bin_coords, check_maps, detect_fields
 
@@ -203,7 +204,8 @@ def border_stats(maps, weights, walls: Walls, *, threshold, min_bins, connectivi
     .. math:: b = \\frac{c_M - d_m}{c_M + d_m}
 
     ``weights`` (N, ny, nx) are the non-negative rates that weight the firing distance.
-    Maps without a field score -1 (``c_M = 0``; the BNT/opexebo convention).
+    Maps without a field score -1 (``c_M = 0``; the BNT/opexebo convention); maps without
+    a single finite bin (no visited bin, NaN activity) are undefined: NaN.
 
     Returns a dict of arrays (N,): ``score``, ``coverage`` (c_M), ``distance`` (d_m),
     ``wall`` (index of the best wall, -1 if none), ``n_fields``.
@@ -236,7 +238,9 @@ def border_stats(maps, weights, walls: Walls, *, threshold, min_bins, connectivi
         dm = (wts * walls.distance[None]).sum(1) / wts.sum(1) / walls.d_max
         score = (coverage - dm) / (coverage + dm)
     has_field = f.count > 0
-    score = np.where(has_field, score, -1.0)
+    # no field: -1 (the BNT/opexebo convention); no finite bin at all: undefined (NaN)
+    defined = np.isfinite(np.asarray(maps, float).reshape(n_maps, -1)).any(axis=1)
+    score = np.where(has_field, score, np.where(defined, -1.0, np.nan))
     return {"score": score, "coverage": coverage, "distance": np.where(has_field, dm, np.nan),
             "wall": best_wall, "n_fields": f.count}
 

@@ -30,7 +30,7 @@ CLASSES = {
     "head_direction": ("hd_mean_vector_length", "hd_percentile", "Boccara et al. 2010"),
     "speed": ("speed_score", "speed_percentile", "Kropff et al. 2015"),
     "conjunctive": ("pxd_direction_length", "conjunctive_percentile",
-                    "Burgess et al. 2005; Sargolini et al. 2006"),
+                    "Burgess et al. 2005; Cacucci et al. 2004"),
 }
 
 
@@ -73,7 +73,9 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     ``head_direction``        mean vector length > 99th pct of shuffles (+)      [5]
     ``speed``                 speed score > 99th pct of shuffles                 [6]
     ``conjunctive``           both factors of the position x direction model     [7, 8]
-                              > 99th pct of their shuffles
+                              > 99th pct of their shuffles: place x direction,
+                              significant on both factors (additive tuning
+                              counts too), not Sargolini's grid x direction
     ========================  =================================================  ========
 
     (*) and, with ``config.spatial_gate`` (default), significant spatial information as
@@ -86,7 +88,8 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     Shuffles are circular time shifts of the activity against the behaviour (each at
     least 20 s), the same shifts for every score; a threshold is each unit's own
     shuffles' percentile (``threshold="unit"``) or that of all units' shuffles pooled
-    (``"pooled"``, as the papers). The maps are made once (:func:`ratemaps`, one bin of
+    (``"pooled"``, as the papers; the ``*_p_value`` columns are always against the unit's
+    own shuffles). The maps are made once (:func:`ratemaps`, one bin of
     smoothing for fields, grid and border scores, unsmoothed for information) and each
     shift is binned once for the three spatial scores. A unit may be in several classes
     (the ``is_*`` columns); ``cell_class`` names the first of
@@ -128,7 +131,7 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     322:1865-1868. [3] Bjerknes, Moser & Moser (2014), Neuron 82:71-78. [4] Skaggs et al.
     (1993), NIPS 5. [5] Boccara et al. (2010), Nat. Neurosci. 13:987-994. [6] Kropff et
     al. (2015), Nature 523:419-424. [7] Burgess et al. (2005), Hippocampus 15:149-153.
-    [8] Sargolini et al. (2006), Science 312:758-762.
+    [8] Cacucci, Lever, Wills, Burgess & O'Keefe (2004), J. Neurosci. 24:8265-8277.
 
     Examples
     --------
@@ -151,6 +154,10 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
         raise TypeError(f"`config` must be a CellClassConfig; got {type(cfg).__name__}")
     _common.check_recording(rec, ["activity", "position"], why="cell classes")
     n_shuffles = cfg.n_shuffles if n_shuffles is None else n_shuffles
+    if isinstance(n_shuffles, (int, np.integer)) and not isinstance(n_shuffles, bool) \
+            and n_shuffles < 1:
+        raise ValueError(f"`n_shuffles` must be >= 1: every class is decided against the "
+                         f"unit's shuffles; got {n_shuffles}")
     threshold = check_option("threshold", cfg.threshold if threshold is None else threshold,
                              ("unit", "pooled"))
     rec, env = _one_environment(rec, environment)
@@ -259,7 +266,9 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
                                        "large"})
         with np.errstate(invalid="ignore"):
             above[name] = np.asarray(observed) > s["threshold"]
-        if name in gates and cfg.factorial_gate:
+        # the factorial gate needs the position x direction model: without head direction
+        # there is none, and the place class is decided without it
+        if name in gates and cfg.factorial_gate and "head_direction" in rec.variables:
             g = summarize(observed, shuffled, gates[name], threshold)["threshold"] \
                 if n_shuffles else nan
             out[f"{name}_gate_threshold"] = ("unit", g, {

@@ -9,7 +9,8 @@ from scipy import ndimage
 
 from .._validators import check_number, check_option
 from . import _common
-from ._shuffles import MapStack, add_significance, check_percentile, flat_maps, refuse_map_options
+from ._common import refuse_map_options
+from ._shuffles import MapStack, add_significance, check_percentile, flat_maps
 from .config import CELL_CLASS, GRID
 from .place_fields import bin_coords, check_maps
 
@@ -477,8 +478,10 @@ def grid_score(rec_or_maps, *, n_shuffles=None, seed=None, percentile=None, thre
     with zero fill); the central peak is the region above r = 0.1 (opexebo: an adaptive
     place-field search); the sweep's windows include the last three radii (opexebo's loop
     stops one window short); spacing is the median of six peak distances (opexebo: the
-    mean of three). On fully visited maps the autocorrelograms are identical and the
-    scores agree closely (see tests/analysis/test_grid_score.py).
+    mean of three). On fully visited maps the autocorrelograms are identical to 1e-10;
+    with opexebo's central radius the ring correlations match to 1e-3, and with ours the
+    scores correlate at r > 0.95 over the test maps and differ by up to 0.3
+    (tests/analysis/test_grid_score.py).
 
     References
     ----------

@@ -10,7 +10,8 @@ from scipy import ndimage
 
 from .._validators import check_dims, check_number, check_option
 from . import _common
-from ._shuffles import flat_maps, refuse_map_options
+from ._common import refuse_map_options
+from ._shuffles import flat_maps
 from .config import PLACE_FIELD
 from .ratemaps import ratemaps
 

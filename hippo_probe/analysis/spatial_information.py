@@ -107,15 +107,9 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
         if n_shuffles:
             raise ValueError("`n_shuffles` needs a recording (the shuffles re-bin the "
                              f"samples); got rate maps and n_shuffles={n_shuffles}")
-        given = {k: v for k, v in dict(seed=seed, bin_size=bin_size, sigma=sigma,
-                                       min_occupancy=min_occupancy, min_speed=min_speed,
-                                       by=by, extent=extent).items() if v is not None}
-        if given:
-            verb = "applies" if len(given) == 1 else "apply"
-            raise ValueError(f"{', '.join(f'`{k}`' for k in given)} only {verb} when a "
-                             f"recording is given (the maps are already made); got rate "
-                             f"maps and {', '.join(f'{k}={v!r}' for k, v in given.items())}"
-                             f". Pass them to ratemaps() instead")
+        _common.refuse_map_options(seed=seed, bin_size=bin_size, sigma=sigma,
+                                   min_occupancy=min_occupancy, min_speed=min_speed,
+                                   by=by, extent=extent)
         maps = rec_or_maps
         if "occupancy" not in maps.coords or "activity_min" not in maps.coords:
             raise ValueError("`rec_or_maps` must be a recording or the output of "

@@ -219,11 +219,12 @@ def speed_score(rec, *, n_shuffles=None, seed=None, percentile=None, threshold=N
     coords["n_samples"] = ((), int(valid.sum()), {"units": "1",
                                                  "long_name": "samples in the speed range"})
     out = xr.Dataset(coords=coords)
-    units = rec["activity"].attrs.get("units", "1")
+    # spike counts per sample as Hz (Kropff et al. report Hz per cm/s); others as they are
+    scale, units, _ = _common.rate_scale(rec)
     out["speed_score"] = ("unit", r[:, 0], {"units": "1", "long_name": "speed score"})
-    out["speed_slope"] = ("unit", slope[:, 0], {
+    out["speed_slope"] = ("unit", slope[:, 0] * scale, {
         "units": f"{units} per m/s", "long_name": "slope of activity on speed"})
-    out["speed_intercept"] = ("unit", intercept[:, 0], {
+    out["speed_intercept"] = ("unit", intercept[:, 0] * scale, {
         "units": units, "long_name": "activity at zero speed (linear fit)"})
     if n_shuffles:
         add_significance(out, "speed_score", ("unit",), r[:, 0], r[:, 1:].T, percentile,

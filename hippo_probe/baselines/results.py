@@ -130,7 +130,7 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
     parts = {name: [] for name in runs}
     starts = range(0, len(batch), chunk)
     if progress:
-        from tqdm import tqdm
+        from tqdm.auto import tqdm
 
         starts = tqdm(starts, desc=f"baselines {batch.task}", unit="chunk")
     for lo in starts:

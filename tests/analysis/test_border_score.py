@@ -132,3 +132,15 @@ def test_border_score_agrees_with_opexebo_on_a_square_arena():
         converted = (c - (d + 1 / n)) / (c + d + 1 / n)
         assert converted == pytest.approx(score, abs=1e-9)
         assert res.border_score.values[u] >= score     # our bins lie 0.5 bin nearer
+
+
+def test_a_map_without_data_is_nan_and_one_without_a_field_is_minus_one():
+    from .cell_fixtures import mixed_population
+
+    rec = mixed_population(n=6000)
+    maps = hp.ratemaps(rec, sigma=1).copy()
+    maps[1] = np.nan                      # no finite bin: undefined
+    maps[2] = 0.0                         # visited but flat: no field, the -1 convention
+    walls = rec["arena_vertices"].values[0]
+    score = hp.border_score(maps, walls=walls).border_score.values
+    assert np.isnan(score[1]) and score[2] == -1.0 and np.isfinite(score[0])

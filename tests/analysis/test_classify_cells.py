@@ -102,3 +102,17 @@ def test_arguments_are_checked(population):
         hp.classify_cells(population, config={"grid_percentile": 90})
     with pytest.raises(ValueError, match="`threshold` must be one of 'unit', 'pooled'"):
         hp.classify_cells(population, threshold="all")
+
+
+def test_without_head_direction_place_cells_are_still_found(population):
+    """No head direction: the head-direction and conjunctive classes are NaN-scored and
+    empty, and the place class is decided without the factorial gate."""
+    table = hp.classify_cells(population.drop_vars("head_direction"), n_shuffles=50, seed=0)
+    assert table.cell_class.values[2] == "place"
+    assert not table.is_head_direction.values.any() and not table.is_conjunctive.values.any()
+    assert np.isnan(table.hd_mean_vector_length.values).all()
+
+
+def test_no_shuffles_is_refused_not_silently_unclassified(population):
+    with pytest.raises(ValueError, match="`n_shuffles` must be >= 1"):
+        hp.classify_cells(population, n_shuffles=0)

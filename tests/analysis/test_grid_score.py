@@ -100,7 +100,7 @@ def test_arguments_are_checked(grid_rec):
         hp.grid_score(maps, annulus="ring")
     with pytest.raises(ValueError, match="`percentile` must be < 100"):
         hp.grid_score(maps, percentile=100)
-    with pytest.raises(ValueError, match="`sigma` only apply when a recording"):
+    with pytest.raises(ValueError, match="`sigma` only applies when a recording"):
         hp.grid_score(maps, sigma=2)
 
 

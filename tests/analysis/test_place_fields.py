@@ -83,7 +83,7 @@ def test_arguments_are_checked(fields_rec):
         hp.place_fields(maps, threshold=1.5)
     with pytest.raises(ValueError, match="`connectivity` must be one of 1, 2; got 3"):
         hp.place_fields(maps, connectivity=3)
-    with pytest.raises(ValueError, match="`bin_size` only apply when a recording"):
+    with pytest.raises(ValueError, match="`bin_size` only applies when a recording"):
         hp.place_fields(maps, bin_size=0.1)
     with pytest.raises(TypeError, match="`rec_or_maps` must be a recording"):
         hp.place_fields(maps.values)

@@ -76,3 +76,17 @@ def test_arguments_are_checked(speed_rec):
         hp.speed_score(speed_rec, min_speed=5.0, max_speed=6.0)
     with pytest.raises(ValueError, match="`threshold` must be one of 'unit', 'pooled'"):
         hp.speed_score(speed_rec, threshold="all")
+
+
+def test_a_spike_units_slope_is_in_hz_per_metre_per_second():
+    """Spike counts per sample become Hz, as the rate maps do (Kropff et al. report the
+    slope in Hz per cm/s)."""
+    rng = np.random.default_rng(3)
+    n, dt = 40000, 0.1
+    pos, heading, speed = square_walk(n, rng, dt=dt)
+    counts = rng.poisson((2.0 + 10 * speed) * dt)[:, None].astype(float)
+    rec = make_recording(pos, counts, dt=dt, activity_kind="spike_count")
+    res = hp.speed_score(rec, n_shuffles=0, sigma=0)
+    assert res.speed_slope.attrs["units"] == "Hz per m/s"
+    np.testing.assert_allclose(res.speed_slope.values[0], 10.0, rtol=0.15)
+    np.testing.assert_allclose(res.speed_intercept.values[0], 2.0, atol=0.3)

@@ -96,7 +96,10 @@ class MapStack:
     The samples are binned once per batch of shifts (:func:`_ratemap_parts`), unsmoothed;
     the smoothed maps come from the same sums by normalized convolution, so one pass gives
     both. Every shift shares the occupancy (a circular shift moves activity against a
-    fixed trajectory).
+    fixed trajectory). With ``by=`` the shift runs over the whole recording, so a group's
+    shuffled maps hold activity from other groups too: where the mean rate differs between
+    environments (rate remapping), each group's null distribution is that of the pooled
+    recording, not of the group alone.
 
     Attributes
     ----------

@@ -61,10 +61,16 @@ def factorize(sums, counts, n_iterations, tolerance):
             scale = (g_new * w_d).sum(-1, keepdims=True)
             g_new = np.where(scale > 0, g_new / scale, 1.0)
             f_new = np.nan_to_num(f_new) * np.where(scale > 0, scale, 1.0)
-            change = np.abs(f_new - f).max() / max(np.abs(f_new).max(), 1e-300)
+            # relative change of each map on its own scale: a weak unit converges too
+            peak = np.maximum(np.abs(f_new).max(-1), 1e-300)
+            change = (np.abs(f_new - f).max(-1) / peak).max() if f_new.size else 0.0
             f, g = f_new, g_new
             if change < tolerance:
                 break
+        else:
+            warnings.warn(f"the position x direction model did not converge in "
+                          f"{n_iterations} iterations (relative change {change:.2g} > "
+                          f"{tolerance:g})", AnalysisWarning, stacklevel=3)
     f = np.where(occ_x, f, np.nan)
     g = np.where(occ_d, g, np.nan)
     return f, g, n_iter

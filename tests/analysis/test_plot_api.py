@@ -118,7 +118,7 @@ def test_single_axes_plots_draw_into_the_given_ax(place):
 
 
 def test_cell_classes_plot_as_fractions_into_the_given_ax(place):
-    cells = hp.classify_cells(place, n_shuffles=0, bin_size=0.1)
+    cells = hp.classify_cells(place, n_shuffles=5, seed=0, bin_size=0.1)
     fig, ax = plt.subplots()
     assert cells.hp.plot(ax=ax) is fig
     heights = [p.get_height() for p in ax.patches]

@@ -35,6 +35,7 @@ import numpy as np  # noqa: E402
 
 import hippo_probe as hp  # noqa: E402
 from hippo_probe.analysis import AnalysisWarning  # noqa: E402
+from hippo_probe.paper.config import jsonable  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SESSION = ROOT / "tests" / "data" / "A2929-200711.nwb"
@@ -135,20 +136,6 @@ def timing(rec, t_classify, n_shuffles, opexebo_units):
         if ok.sum() > 2 else None,
         "grid_scores_compared": int(ok.sum()),
     }
-
-
-def jsonable(obj):
-    if isinstance(obj, dict):
-        return {str(k): jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return jsonable(obj.tolist())
-    if isinstance(obj, (float, np.floating)):
-        return None if not np.isfinite(obj) else round(float(obj), 5)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
 
 
 def figure(groups, time_info, out, subtitle=""):

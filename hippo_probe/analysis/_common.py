@@ -179,6 +179,13 @@ def circular_shifts(n: int, dt: float, n_shuffles: int, seed: int | None) -> np.
     return rng.integers(max(low, 1), n - max(low, 1) + 1, size=n_shuffles)
 
 
+def shifts_for(rec, n_shuffles, seed):
+    """``[0, s_1, ..., s_n]``: no shift (the observed score), then the random shifts of
+    :func:`circular_shifts`."""
+    return np.r_[0, circular_shifts(rec.sizes["time"], sample_dt(rec), n_shuffles,
+                                    seed)].astype(np.int64)
+
+
 def entry_labels(da) -> list[str]:
     """A readable label for every entry of ``da`` (e.g. 'unit=3, environment=1')."""
     names = list(da.dims)

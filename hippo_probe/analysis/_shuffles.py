@@ -19,14 +19,8 @@ import numpy as np
 
 from .._validators import check_number, check_option
 from . import _common
-from ._common import AnalysisWarning
+from ._common import AnalysisWarning, shifts_for
 from .ratemaps import _maps_dataarray, _ratemap_parts, smooth_normalized
-
-
-def shifts_for(rec, n_shuffles, seed):
-    """``[0, s_1, ..., s_n]``: no shift (the observed score), then the random shifts."""
-    return np.r_[0, _common.circular_shifts(rec.sizes["time"], _common.sample_dt(rec),
-                                            n_shuffles, seed)].astype(np.int64)
 
 
 def check_percentile(name, value):

@@ -10,7 +10,8 @@ import xarray as xr
 from .._validators import check_number, check_option
 from . import _common
 from ._common import AnalysisWarning
-from ._shuffles import add_significance, check_percentile, shifts_for
+from ._common import shifts_for
+from ._shuffles import add_significance, check_percentile
 from .config import CELL_CLASS, CONJUNCTIVE, HEAD_DIRECTION
 from .head_direction_tuning import direction_bins, mean_vector
 from .ratemaps import _positions, position_bins, spatial_grid, tuning_sums

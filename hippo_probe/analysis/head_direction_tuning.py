@@ -135,7 +135,7 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
                          "all NaN" + (" or slower than min_speed" if min_speed else ""))
     codes, labels, dim = _common.group_codes(rec, by)
     n_groups = 1 if labels is None else len(labels)
-    shifts = np.r_[0, _common.circular_shifts(rec.sizes["time"], dt, n_shuffles, seed)]
+    shifts = _common.shifts_for(rec, n_shuffles, seed)
     check_allocation("n_bins", (len(shifts), rec.sizes["unit"], n_groups, n_bins))
     res = tuning_sums(rec, bins, codes, n_groups, n_bins, shifts)
     sums, counts = res.sums, res.counts

@@ -120,8 +120,7 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
     else:
         rec = _common.check_recording(rec_or_maps, ["activity", "position"],
                                       why="spatial information")
-        shifts = np.r_[0, _common.circular_shifts(rec.sizes["time"], _common.sample_dt(rec),
-                                                  n_shuffles, seed)]
+        shifts = _common.shifts_for(rec, n_shuffles, seed)
         parts = _ratemap_parts(
             rec, bin_size=bin_size, sigma=INFORMATION.sigma if sigma is None else sigma,
             min_occupancy=min_occupancy, min_speed=min_speed, by=by, extent=extent,

@@ -10,7 +10,8 @@ from scipy import ndimage
 
 from .._validators import check_number, check_option
 from . import _common
-from ._shuffles import add_significance, check_percentile, shifts_for
+from ._common import shifts_for
+from ._shuffles import add_significance, check_percentile
 from .config import CELL_CLASS, RATEMAP, SPEED
 
 

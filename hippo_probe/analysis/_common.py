@@ -198,9 +198,12 @@ def _common_coord(da, dim):
     return da[dim].values if dim in da.coords else np.arange(da.sizes[dim])
 
 
-def refuse_map_options(**options):
+def refuse_map_options(n_shuffles=None, **options):
     """Options that only act on a recording (map making, shuffles) refused when rate maps
     are given instead: silently ignoring them would mislead."""
+    if n_shuffles:
+        raise ValueError("`n_shuffles` needs a recording (the shuffles re-bin the "
+                         f"samples); got rate maps and n_shuffles={n_shuffles}")
     given = {k: v for k, v in options.items() if v is not None}
     if not given:
         return

@@ -388,11 +388,8 @@ def border_score(rec_or_maps, *, walls=None, n_shuffles=None, seed=None, percent
         check_option("walls", walls, ("occupancy",))
     stack = None
     if isinstance(rec_or_maps, xr.DataArray):
-        if n_shuffles:
-            raise ValueError("`n_shuffles` needs a recording (the shuffles re-bin the "
-                             f"samples); got rate maps and n_shuffles={n_shuffles}")
-        refuse_map_options(seed=seed, bin_size=bin_size, sigma=sigma, min_speed=min_speed,
-                           by=by, extent=extent)
+        refuse_map_options(n_shuffles, seed=seed, bin_size=bin_size, sigma=sigma,
+                           min_speed=min_speed, by=by, extent=extent)
         maps, n_shuffles, rec = rec_or_maps, 0, None
     else:
         rec = _common.check_recording(rec_or_maps, ["activity", "position"],

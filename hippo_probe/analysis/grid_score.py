@@ -510,11 +510,8 @@ def grid_score(rec_or_maps, *, n_shuffles=None, seed=None, percentile=None, thre
                              else threshold, ("unit", "pooled"))
     stack = None
     if isinstance(rec_or_maps, xr.DataArray):
-        if n_shuffles:
-            raise ValueError("`n_shuffles` needs a recording (the shuffles re-bin the "
-                             f"samples); got rate maps and n_shuffles={n_shuffles}")
-        refuse_map_options(seed=seed, bin_size=bin_size, sigma=sigma, min_speed=min_speed,
-                           by=by, extent=extent)
+        refuse_map_options(n_shuffles, seed=seed, bin_size=bin_size, sigma=sigma,
+                           min_speed=min_speed, by=by, extent=extent)
         maps = rec_or_maps
         n_shuffles = 0
     else:

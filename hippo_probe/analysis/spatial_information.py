@@ -104,10 +104,7 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
     """
     n_shuffles = INFORMATION.n_shuffles if n_shuffles is None else n_shuffles
     if isinstance(rec_or_maps, xr.DataArray):
-        if n_shuffles:
-            raise ValueError("`n_shuffles` needs a recording (the shuffles re-bin the "
-                             f"samples); got rate maps and n_shuffles={n_shuffles}")
-        _common.refuse_map_options(seed=seed, bin_size=bin_size, sigma=sigma,
+        _common.refuse_map_options(n_shuffles, seed=seed, bin_size=bin_size, sigma=sigma,
                                    min_occupancy=min_occupancy, min_speed=min_speed,
                                    by=by, extent=extent)
         maps = rec_or_maps

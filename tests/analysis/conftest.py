@@ -156,3 +156,19 @@ def two_environment_recording(*, n_units=40, n_trials=12, samples_per_trial=1500
 def place_rec():
     centres = np.array([[-0.3, -0.2], [0.25, 0.3], [0.0, 0.0], [0.3, -0.3]])
     return place_cell_recording(centres), centres
+
+
+@pytest.fixture(scope="module")
+def place():
+    """Three place cells (fields at known centres), 6,000 samples: the plot tests' data."""
+    return place_cell_recording(np.array([[0.2, 0.2], [-0.2, 0.1], [0.0, -0.3]]),
+                                n_samples=6000)
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Figures made by a test do not pile up across tests."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")

@@ -2,7 +2,6 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 from matplotlib.figure import Figure
@@ -12,21 +11,8 @@ from hippo_probe import plot
 
 from .conftest import (
     hd_cell_recording,
-    place_cell_recording,
     two_environment_recording,
 )
-
-
-@pytest.fixture(autouse=True)
-def _close():
-    yield
-    plt.close("all")
-
-
-@pytest.fixture(scope="module")
-def place():
-    return place_cell_recording(np.array([[0.2, 0.2], [-0.2, 0.1], [0.0, -0.3]]),
-                                n_samples=6000)
 
 
 def test_ratemaps_plot_themselves_with_arena_outline(place):

@@ -26,18 +26,6 @@ NWB = Path(__file__).parents[1] / "data" / "A2929-200711.nwb"
 DEG = "\N{DEGREE SIGN}"
 
 
-@pytest.fixture(autouse=True)
-def _close():
-    yield
-    plt.close("all")
-
-
-@pytest.fixture(scope="module")
-def place():
-    return place_cell_recording(np.array([[0.2, 0.2], [-0.2, 0.1], [0.0, -0.3]]),
-                                n_samples=6000)
-
-
 @pytest.fixture(scope="module")
 def hd_rec():
     rec = hd_cell_recording(np.array([0.5, -1.0]), np.array([4.0, 2.0]), n_samples=4000)

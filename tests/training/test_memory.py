@@ -1,20 +1,23 @@
-import resource
+import json
+import subprocess
 import sys
+import textwrap
 
 import pytest
-import torch
 
-from hippo_probe.model.lstm import PeepholeLSTM
-from hippo_probe.training.memory import reuse_freed_memory
+# Run in a fresh interpreter: inside the test session the heap already holds whatever
+# earlier tests freed, so the fault count of "a first step" depends on test order (CI
+# saw 24,000 then 4,001 in one run). A fresh process with and without the setting is the
+# comparison the claim is about.
+STEP_FAULTS = textwrap.dedent("""
+    import json, resource, sys
+    import torch
+    from hippo_probe.model.lstm import PeepholeLSTM
+    from hippo_probe.training.memory import reuse_freed_memory
 
-
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc mallopt")
-def test_a_training_step_reuses_the_last_steps_activations():
-    """Activations above glibc's 32 MiB mmap threshold (here the gates, 66 MB) are page
-    faulted in afresh every step by default (~30,000-50,000 faults per step); kept for
-    reuse, the third step faults in almost nothing."""
-    assert reuse_freed_memory()
-    lstm = PeepholeLSTM(9, 128, precision="bf16")
+    took = reuse_freed_memory() if sys.argv[1] == "reuse" else None
+    torch.manual_seed(0)
+    lstm = PeepholeLSTM(9, 128)
     x = torch.randn(500, 64, 9)
 
     def faults_of_a_step():
@@ -23,6 +26,30 @@ def test_a_training_step_reuses_the_last_steps_activations():
         h.sum().backward()
         return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
 
-    first = faults_of_a_step()
-    faults_of_a_step()
-    assert first > 10_000 and faults_of_a_step() < first / 20
+    faults = [faults_of_a_step() for _ in range(8)]
+    print(json.dumps({"took": took, "faults": faults}))
+""")
+
+
+def step_faults(mode):
+    out = subprocess.run([sys.executable, "-c", STEP_FAULTS, mode], check=True,
+                         capture_output=True, text=True, env={"OMP_NUM_THREADS": "1",
+                                                             "PATH": ""})
+    return json.loads(out.stdout.splitlines()[-1])
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc mallopt")
+def test_a_training_step_reuses_the_last_steps_activations():
+    """Activations above glibc's 32 MiB mmap threshold (here the gates, 66 MB) are page
+    faulted in afresh every step by default; kept for reuse, later steps fault in a small
+    fraction of that."""
+    default = step_faults("default")
+    reuse = step_faults("reuse")
+    assert reuse["took"] is True
+    # After two steps the heap has grown to the step's size; from then on a step with
+    # the setting faults in 0 pages, now and then a few thousand (measured: 0, 4000, 0,
+    # 8008, 0, 0 against ~80,000 every step by default).
+    steady_default = sum(default["faults"][2:]) / 6
+    steady_reuse = sum(reuse["faults"][2:]) / 6
+    assert steady_default > 10_000, default        # the cost the setting removes is real
+    assert steady_reuse < steady_default / 10, (default, reuse)

@@ -45,6 +45,13 @@ def add_commands(sub):
                    help="matmul precision of training: bf16 (AMX matmuls, float32 state "
                         "and optimizer), fp32, or auto = bf16 where the CPU has bf16 "
                         "hardware, else fp32")
+    p.add_argument("--stop-improvement", type=float, default=d.stop_improvement,
+                   metavar="FRACTION",
+                   help="stop before --steps once the validation loss improved by less than "
+                        "this fraction over the last fifth of the steps done (0 = never)")
+    p.add_argument("--max-hours", type=float, default=d.max_hours, metavar="H",
+                   help="stop before --steps once the run's wall time, summed over resumes, "
+                        "passes H hours (0 = no cap)")
     p.add_argument("--seed", type=int, default=d.seed,
                    help="seed of the task's splits (which trials exist)")
     p.add_argument("--init-seed", type=int, default=d.init_seed,
@@ -107,7 +114,9 @@ def _train(a):
                          checkpoint_minutes=a.checkpoint_minutes, threads=a.threads,
                          seed=a.seed, init_seed=a.init_seed, class_weight=a.class_weight,
                          init_from=a.init_from, train_only=a.train_only,
-                         precision=a.precision)
+                         precision=a.precision,
+                         stop_improvement=a.stop_improvement or None,
+                         max_hours=a.max_hours or None)
     log = fit(config, a.out, progress=not a.no_progress, cache_dir=a.cache_dir)
     if "test" in log:
         print(json.dumps(log["test"], indent=1))

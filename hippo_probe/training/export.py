@@ -42,7 +42,9 @@ def export_network(run_dir, name: str, dest=None) -> list:
                    ("log", "step", "config", "model", "best_model", "best_loss",
                     "model_config", "task"), run_dir / "checkpoint.pt", "export a network")
     log = dict(ckpt["log"])
-    finished = ckpt["step"] >= ckpt["config"]["steps"] and "test" in log
+    # the budget is spent, or a stopping rule ended the run (log["stopped"]); either way
+    # the run was tested
+    finished = "test" in log and (ckpt["step"] >= ckpt["config"]["steps"] or "stopped" in log)
     state = ckpt["best_model"] or ckpt["model"]
     state = {k: v.detach().clone().contiguous() for k, v in state.items()}
     # plain dicts and tensors only: a shipped file must not depend on class names

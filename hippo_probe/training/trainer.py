@@ -186,6 +186,44 @@ def summarize(metrics: dict, dt: float, times=(50.0, 100.0, 200.0)) -> dict:
     return out
 
 
+#: the stopping rule is not applied before this many steps (early curves are noisy and the
+#: "last fifth" of a few hundred steps is a handful of validations)
+MIN_STEPS_BEFORE_STOPPING = 2000
+
+
+def stop_reason(config: TrainConfig, validation: list, step: int,
+                wall_time_s: float) -> str | None:
+    """Why training should end before its budget, or None to go on.
+
+    Two rules (the training issue's): the run has used ``config.max_hours`` of wall time,
+    or its validation loss improved by less than ``config.stop_improvement`` over the last
+    fifth of its steps::
+
+        1 - min(loss_v : v) / min(loss_v : step_v <= 0.8 step) < stop_improvement
+
+    Parameters
+    ----------
+    validation : list of dict
+        The log's validations (``step`` and ``loss`` of each).
+    step : int
+        Steps done.
+    wall_time_s : float
+        Wall time of the run so far, summed over resumes.
+    """
+    if config.max_hours is not None and wall_time_s >= 3600 * config.max_hours:
+        return f"max_hours: {wall_time_s / 3600:.2f} h of wall time >= {config.max_hours} h"
+    if config.stop_improvement is None or step < MIN_STEPS_BEFORE_STOPPING:
+        return None
+    before = [v["loss"] for v in validation if v["step"] <= 0.8 * step]
+    if not before or len(before) == len(validation):
+        return None
+    improvement = 1 - min(v["loss"] for v in validation) / min(before)
+    if improvement < config.stop_improvement:
+        return (f"stop_improvement: validation loss improved by {100 * improvement:.2f}% "
+                f"over steps {int(0.8 * step)}-{step} (< {100 * config.stop_improvement:g}%)")
+    return None
+
+
 def _lr_at(config: TrainConfig, step: int) -> float:
     frac = min(step / max(config.steps, 1), 1.0)
     return config.lr_final + 0.5 * (config.lr - config.lr_final) * (1 + math.cos(math.pi * frac))
@@ -343,6 +381,16 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
                                                       log["validation"][-1]["step"] != step):
                 if rank == 0:
                     last_val = validate()
+                reason = stop_reason(config, log["validation"], step,
+                                     wall0 + time.time() - t_start)
+                if world_size > 1:         # every rank stops at the same step
+                    flag = torch.tensor([reason is not None], dtype=torch.int32)
+                    torch.distributed.broadcast(flag, 0)
+                    if rank != 0:
+                        reason = "the stopping rule on rank 0" if flag.item() else None
+                if reason is not None:
+                    log["stopped"] = {"step": step, "reason": reason}
+                    break
             idx = data.indices(step)
             per_rank = config.batch_size // world_size
             idx = idx[rank * per_rank:(rank + 1) * per_rank]

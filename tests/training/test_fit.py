@@ -310,3 +310,46 @@ def test_evaluate_refuses_no_trials_and_a_broken_network(uninterrupted, tmp_path
     save_atomic(obj, tmp_path / "nan.pt")         # a NaN network, intact as a file
     assert main(["evaluate", str(tmp_path / "nan.pt"), "--trials", "2"]) == 2
     assert "non-finite results" in capsys.readouterr().err
+
+
+def _validations(losses, every=500):
+    return [{"step": every * i, "loss": v} for i, v in enumerate(losses)]
+
+
+def test_stop_reason_follows_the_last_fifth_rule():
+    from hippo_probe.training.trainer import stop_reason
+    config = TrainConfig(**TINY)
+    # 5,000 steps; the last fifth is 4,000-5,000: best 1.0 before, 0.995 in it (0.5%)
+    flat = _validations([3.0, 2.0, 1.5, 1.2, 1.1, 1.05, 1.02, 1.01, 1.0, 0.999, 0.995])
+    assert "0.50%" in stop_reason(config, flat, 5000, 0.0)
+    # the same run improving by 2% over its last fifth goes on
+    falling = flat[:-2] + [{"step": 4500, "loss": 0.99}, {"step": 5000, "loss": 0.98}]
+    assert stop_reason(config, falling, 5000, 0.0) is None
+    # too early to judge, or the rule switched off
+    assert stop_reason(config, flat[:4], 1500, 0.0) is None
+    assert stop_reason(TrainConfig(**{**TINY, "stop_improvement": None}), flat, 5000,
+                       0.0) is None
+    # the wall-time cap, whatever the curve
+    assert stop_reason(TrainConfig(**{**TINY, "max_hours": 1}), falling, 5000,
+                       3601.0).startswith("max_hours")
+
+
+def test_a_run_past_its_hour_cap_stops_tested_and_exportable(tmp_path):
+    # a cap of ~0 hours: the run stops at its first validation (step 0 is validated, then
+    # checked), is tested, and saves its network
+    config = TrainConfig(**{**TINY, "max_hours": 1e-9})
+    log = fit(config, tmp_path / "run", cache_dir=tmp_path / "cache", progress=False)
+    assert log["stopped"]["step"] == 0 and log["stopped"]["reason"].startswith("max_hours")
+    assert "test" in log and (tmp_path / "run" / "network.pt").exists()
+    from hippo_probe.training.export import export_network
+    export_network(tmp_path / "run", "tiny", tmp_path / "shipped")
+    shipped = json.loads((tmp_path / "shipped" / "tiny.log.json").read_text())
+    assert shipped["finished"] is True and shipped["steps_done"] == 0
+
+
+def test_the_stopping_rule_may_change_on_resume():
+    a = TrainConfig(**TINY)
+    b = TrainConfig(**{**TINY, "stop_improvement": None, "max_hours": 3.0})
+    assert a.differences(b) == {}
+    with pytest.raises(ValueError, match="stop_improvement"):
+        TrainConfig(**{**TINY, "stop_improvement": 2.0})

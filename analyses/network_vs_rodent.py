@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 
 from hippo_probe.paper import rodent
-from hippo_probe.paper.config import CONFIGS, with_cache
+from hippo_probe.paper.config import CONFIGS, first_run, with_cache
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -26,7 +26,8 @@ def main():
     ap.add_argument("--session", default=str(ROOT / rodent.SESSION),
                     help="the mouse's NWB session")
     a = ap.parse_args()
-    rodent.make(with_cache(CONFIGS[a.size], ROOT / "recordings"), Path(a.out),
+    # the networks of the figures' first run (the darkness world's, once shipped)
+    rodent.make(first_run(with_cache(CONFIGS[a.size], ROOT / "recordings")), Path(a.out),
                 session=a.session)
 
 

@@ -13,6 +13,9 @@ from .cli import check_output, one_of
 # the names only: the builders (matplotlib, torch) are imported when a command runs
 from .paper import FIGURES
 
+#: the worlds of the figures (hippo_probe.paper.config.WORLDS, without importing it)
+WORLDS = ("darkness", "compass")
+
 
 def add_commands(sub):
     sizes = ("tiny", "full", "paper")
@@ -41,6 +44,11 @@ def add_commands(sub):
     f.add_argument("--only", nargs="*", choices=FIGURES, default=None, metavar="FIG",
                    type=one_of("only", FIGURES),
                    help=f"make only these figures, of {', '.join(FIGURES)} (default: all)")
+    f.add_argument("--world", nargs="*", choices=WORLDS, default=None, metavar="WORLD",
+                   type=one_of("world", WORLDS),
+                   help=f"make the figures of these worlds' networks, of "
+                        f"{', '.join(WORLDS)} (default: every world with shipped networks; "
+                        f"each world's figures once per shipped training seed)")
     f.add_argument("--cache", default=None, metavar="FOLDER", help=cache_help)
     f.add_argument("--refresh-tracked", action="store_true",
                    help="also copy the figures and RESULTS.md over the repository's tracked "
@@ -77,17 +85,30 @@ def _figures(args, *, extra_tracked=()):
     from . import paper
     from .paper import config
 
-    cfg = config.with_cache(config.CONFIGS[args.size], cache)
+    worlds = getattr(args, "world", None) or config.WORLDS
+    runs = config.shipped_runs(worlds)
+    if not runs:
+        raise ValueError(f"no shipped networks of the world(s) {', '.join(worlds)}: "
+                         f"`hippo-probe export-network` a trained run first")
+    if args.refresh_tracked and set(worlds) != set(config.WORLDS):
+        raise ValueError("--refresh-tracked needs every world; drop --world")
+    base = config.with_cache(config.CONFIGS[args.size], cache)
+    # the figures of the first run (the darkness world's first seed once shipped) are the
+    # ones shown; every run's are kept, and RESULTS.md and the ablation use them all
+    cfgs = [config.for_run(base, world, seed) for world, seed in runs]
     t_all = time.time()
     names = args.only or FIGURES
-    with tqdm(names, desc="figures", unit="figure", disable=args.no_progress) as bar:
-        for name in bar:
+    jobs = [(cfg, name) for cfg in cfgs for name in names]
+    tqdm.write(f"runs: {', '.join(cfg.run for cfg in cfgs)}")
+    with tqdm(jobs, desc="figures", unit="figure", disable=args.no_progress) as bar:
+        for cfg, name in bar:
             t0 = time.time()
-            bar.set_postfix_str(name)
-            tqdm.write(f"== {name} ({args.size}) ==")
-            paper.builder(name).make(cfg, out)
+            bar.set_postfix_str(f"{cfg.run} {name}")
+            tqdm.write(f"== {cfg.run}: {name} ({args.size}) ==")
+            paper.builder(name).make(cfg, out / cfg.run)
             tqdm.write(f"   {name} done in {time.time() - t0:.0f} s")
-    made = list(names)
+    primary = cfgs[0]
+    shown = [out / primary.run / f"{name}.png" for name in names]
     from .paper.results import NOTES, write_results
     try:
         notes = config.repository_file(NOTES, argument="notes")
@@ -97,6 +118,8 @@ def _figures(args, *, extra_tracked=()):
         notes = None
         print(f"(no {NOTES}: RESULTS.md without the notes; run from a clone for them)")
     print(f"wrote {write_results(out, out / 'RESULTS.md', notes)}")
+    from .paper import ablation
+    shown.append(ablation.make(out, out))
     from .paper import rodent
     try:
         session = config.repository_file(rodent.SESSION, argument="session")
@@ -105,12 +128,12 @@ def _figures(args, *, extra_tracked=()):
             raise
         print(f"(no {rodent.SESSION}: the network-vs-rodent comparison runs from a clone)")
     else:
-        print("== network vs rodent ==")
-        rodent.make(cfg, out, session=session)
-        made.append("network_vs_rodent")
+        print(f"== network vs rodent ({primary.run}) ==")
+        rodent.make(primary, out, session=session)
+        shown.append(out / "network_vs_rodent.png")
     if args.refresh_tracked:
         from .paper.tracked import refresh_tracked
-        for path in refresh_tracked(out, [*made, *extra_tracked]):
+        for path in refresh_tracked([*shown, *extra_tracked], out / "RESULTS.md"):
             print(f"refreshed {path}")
     print(f"all figures in {out}/ ({time.time() - t_all:.0f} s)")
 
@@ -136,6 +159,6 @@ def _main(args):
     save_figure(fig, out / "example_trials.png", dpi=120)
     print(f"saved {out / 'example_trials.png'}")
     _figures(args.__class__(out=args.out, size=args.size, only=None, cache=args.cache,
-                            refresh_tracked=refresh,
+                            refresh_tracked=refresh, world=None,
                             no_progress=args.no_progress),
-             extra_tracked=("example_trials",))
+             extra_tracked=(out / "example_trials.png",))

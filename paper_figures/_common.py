@@ -12,17 +12,23 @@ from pathlib import Path
 
 # the old home of these names
 from hippo_probe.paper.config import *
-from hippo_probe.paper.config import CONFIGS, with_cache
+from hippo_probe.paper.config import CONFIGS, WORLDS, for_run, with_cache
 
 ROOT = Path(__file__).resolve().parents[1]
 CACHE = ROOT / "recordings"
 
 
 def parse_args(description: str):
-    """``--size`` and ``--out`` of a figure script -> (configuration, output folder)."""
+    """``--size``, ``--world``, ``--seed`` and ``--out`` of a figure script ->
+    (configuration, output folder of the run: ``OUT/<world>-seed<k>``, where
+    ``paper_figures/results.py`` reads it)."""
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--size", choices=sorted(CONFIGS), default="full",
                     help="data size (default full: minutes on 2 cores)")
+    ap.add_argument("--world", choices=WORLDS, default=WORLDS[0],
+                    help="world of the networks and their trials")
+    ap.add_argument("--seed", type=int, default=0, help="training seed of the networks")
     ap.add_argument("--out", default=str(ROOT / "figures"), help="output folder")
     a = ap.parse_args()
-    return with_cache(CONFIGS[a.size], CACHE), Path(a.out)
+    cfg = for_run(with_cache(CONFIGS[a.size], CACHE), a.world, a.seed)
+    return cfg, Path(a.out) / cfg.run

@@ -38,7 +38,11 @@ def figures_run(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def figures(figures_run):
-    return figures_run[0]
+    """The folder of the first run's figures (``<world>-seed<k>``)."""
+    from hippo_probe.paper.config import shipped_runs
+
+    world, seed = shipped_runs()[0]
+    return figures_run[0] / f"{world}-seed{seed}"
 
 
 def test_figures_write_only_under_out(figures_run):
@@ -47,6 +51,7 @@ def test_figures_write_only_under_out(figures_run):
     out, before, after = figures_run
     assert (out / "RESULTS.md").stat().st_size > 1000
     assert (out / "network_vs_rodent.json").exists()
+    assert (out / "ablation.png").stat().st_size > 1000
     assert (out / "cache" / "paper-tiny").is_dir()       # the cached recordings, under out
     if before is None:
         pytest.skip("not a git checkout")
@@ -112,29 +117,72 @@ def test_fig2_numbers_are_errors_in_metres(figures):
         assert finite and all(0 <= v < 3 for v in finite)   # within a 1 m arena's span
 
 
-def test_results_table(figures, tmp_path):
+def test_results_table(figures_run, tmp_path):
+    from hippo_probe.paper.config import WORLDS, shipped_runs
+
     out = tmp_path / "RESULTS.md"
     run = subprocess.run([sys.executable, str(ROOT / "paper_figures" / "results.py"),
-                          "--figures", str(figures), "--out", str(out)],
+                          "--figures", str(figures_run[0]), "--out", str(out)],
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
-    claims, errors = out.read_text().split("Mean Euclidean error (m)")
+    claims, details = out.read_text().split("## Details", 1)
 
     def table(text):
         return [line for line in text.splitlines() if line.startswith("| ") and "---" not in line]
 
     rows = table(claims)
-    assert len(rows) >= 11
-    measured = [row.rsplit("|", 2)[-2] for row in rows[1:]]
-    assert not [m for m in measured if "n/a" in m], measured
+    assert len(rows) >= 12
+    # a column pair (numbers, verdict) per world; a world with shipped networks has every
+    # claim measured, one without says so
+    header = [c.strip() for c in rows[0].split("|")[1:-1]]
+    assert header[2:] == [x for w in WORLDS for x in (f"{w} world: mean (min–max) over "
+                                                      f"seeds", f"verdict, {w}")]
+    shipped = {w for w, _ in shipped_runs()}
+    for row in rows[1:]:
+        cells = [c.strip() for c in row.split("|")[1:-1]]
+        for k, world in enumerate(WORLDS):
+            numbers, verdict = cells[2 + 2 * k], cells[3 + 2 * k]
+            if world in shipped:
+                assert "n/a" not in numbers and verdict.split(",")[0] in (
+                    "reproduced", "partly", "not reproduced"), row
+            else:
+                assert numbers == "not trained yet", row
     # each network beside its baselines at 50 / 100 / 200 s: three numbers per cell
-    rows = table(errors)
+    errors = details.split("Mean Euclidean error (m)", 1)[1]
+    rows = table(errors)[:4]
     assert [r.split("|")[1].split()[0] for r in rows[1:]] == ["localization", "generalized",
                                                               "specialized"]
     for row in rows[1:]:
         network, pf = row.split("|")[2:4]
         assert len(network.split("/")) == 3 and len(pf.split("/")) == 3
     assert "Arena classification accuracy at 50 / 100 / 200 s" in errors
+
+
+def test_results_spread_over_seeds(tmp_path):
+    """Three seeds of one world: the table shows mean (min–max), the verdict is the rule
+    on the seed means, and the seeds that reach it alone are counted."""
+    from hippo_probe.paper.results import write_results
+
+    for seed, ratio in enumerate((1.1, 1.3, 1.9)):
+        run = tmp_path / f"darkness-seed{seed}"
+        run.mkdir()
+        (run / "fig2.json").write_text(json.dumps(
+            {"figure": "fig2", "size": {"name": "tiny"}, "n_trials": 4,
+             "summary": {"network / PF error, t > 100 s": ratio}}))
+    text = write_results(tmp_path, tmp_path / "RESULTS.md", None).read_text()
+    row = next(line for line in text.splitlines() if line.startswith("| Fig. 2:"))
+    # mean 1.43: "partly" by the rule (ratio <= 1.2; partly <= 2); seeds: partly, partly
+    # (1.3, 1.9), reproduced (1.1)
+    assert "network / PF, t > 100 s 1.43 (1.10–1.90)" in row
+    assert "partly, 2 of 3 seeds" in row
+    assert "| not trained yet | — |" in row           # no compass run here
+    # the ablation figure plots the same headline numbers, one point per seed
+    from hippo_probe.paper import ablation
+
+    assert ablation.make(tmp_path, tmp_path).stat().st_size > 1000
+    headlines = json.loads((tmp_path / "ablation.json").read_text())["headlines"]
+    fig2 = next(v for k, v in headlines.items() if k.startswith("Fig. 2:"))
+    assert fig2 == {"darkness": {"network / PF, t > 100 s": [1.1, 1.3, 1.9]}}
 
 
 def test_network_vs_rodent(tmp_path):

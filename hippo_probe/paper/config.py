@@ -27,7 +27,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import hippo_probe as hp
-from hippo_probe._atomic import atomic_path
+from hippo_probe._atomic import atomic_path, save_figure, write_text
 from hippo_probe.tasks import make_trials, task_config
 
 from ._repository import PACKAGE, REPOSITORY, repository_file  # noqa: F401
@@ -55,26 +55,28 @@ class FigureConfig:
     remap_trials: int = 400      # specialized trials for remapping / selectivity
     dimension_samples: int = 20000   # Eckmann-Ruelle: D up to ~2 log10 N = 8.6 resolvable
     seed: int = 0
-    # the world of the networks and trials: the compass world's networks until the
-    # darkness world's finish training (issue 13); the trials are always of the networks'
-    # world
-    world: str = "compass"
+    # the run: the world of the networks (and of their trials) and the networks' training
+    # seed; `hippo-probe figures` makes every figure once per shipped run (:func:`runs`)
+    world: str = "darkness"
+    network_seed: int = 0
     cache_root: str | None = field(default=None, repr=False, compare=False)
 
     def network(self, name: str) -> str:
         """The shipped network ``name`` (e.g. "generalized") of this world."""
-        if self.world == "darkness":
-            return name
-        task, _, rest = name.partition("_")
-        return f"{task}_{self.world}" + (f"_{rest}" if rest else "")
+        return network_name(name, self.world)
+
+    @property
+    def run(self) -> str:
+        """The run's name, ``<world>-seed<k>``: its folder under the figures' output."""
+        return f"{self.world}-seed{self.network_seed}"
 
     @property
     def cache(self) -> Path:
-        """Folder of this size's cached recordings and arrays."""
+        """Folder of this run's cached recordings and arrays."""
         if self.cache_root is None:
             raise ValueError("the figures' cache folder is not set: give the configuration "
                              "one with `with_cache(config, folder)`")
-        return Path(self.cache_root) / f"paper-{self.name}"
+        return Path(self.cache_root) / f"paper-{self.name}" / self.run
 
     def numbers(self) -> dict:
         """The configuration as it is written into each figure's JSON."""
@@ -111,9 +113,53 @@ def cached_under(cfg: FigureConfig, out) -> FigureConfig:
 
 
 # ----------------------------------------------------------------------- networks
-def network_file(name: str) -> Path:
+#: The worlds of the figures, in the order of the results table: the study's first.
+WORLDS = ("darkness", "compass")
+
+
+def network_name(name: str, world: str) -> str:
+    """The shipped name of network ``name`` (e.g. "generalized_readout") in ``world``:
+    the darkness world's carry the task's name, the others a ``_<world>`` after it."""
+    if world == "darkness":
+        return name
+    task, _, rest = name.partition("_")
+    return f"{task}_{world}" + (f"_{rest}" if rest else "")
+
+
+def network_file(name: str, seed: int = 0) -> Path:
     from hippo_probe.pretrained import resolve_network_file
-    return resolve_network_file(name)
+    return resolve_network_file(name, seed)
+
+
+def shipped_runs(worlds=WORLDS) -> list[tuple[str, int]]:
+    """(world, training seed) of every run whose networks are all shipped.
+
+    A run needs each network the figures record (:data:`RECORDINGS`) at that seed.
+    """
+    from hippo_probe.pretrained import shipped_seeds
+
+    needed = sorted({network for network, *_ in RECORDINGS.values()})
+    runs = []
+    for world in worlds:
+        seeds = set.intersection(*(set(shipped_seeds(network_name(n, world)))
+                                   for n in needed))
+        runs += [(world, seed) for seed in sorted(seeds)]
+    return runs
+
+
+def for_run(cfg: FigureConfig, world: str, seed: int) -> FigureConfig:
+    """``cfg`` for the networks of ``world`` trained with ``seed``."""
+    return replace(cfg, world=world, network_seed=seed)
+
+
+def first_run(cfg: FigureConfig) -> FigureConfig:
+    """``cfg`` for the run whose figures are shown: the first of :func:`shipped_runs`
+    (the darkness world's first seed once its networks are shipped)."""
+    runs = shipped_runs()
+    if not runs:
+        raise FileNotFoundError("no world has all of the figures' networks shipped "
+                                "(hippo_probe/pretrained)")
+    return for_run(cfg, *runs[0])
 
 
 def code_version() -> str:
@@ -174,7 +220,7 @@ def recording(name: str, cfg: FigureConfig):
     network, task, overrides, which, size_attr = RECORDINGS[name]
     network = cfg.network(network)
     n_trials = getattr(cfg, size_attr)
-    net_path = network_file(network)
+    net_path = network_file(network, cfg.network_seed)
     key = _digest(net_path.read_bytes(), name, n_trials, cfg.particles, cfg.seed,
                   sorted(overrides.items()), which, code_version())
     path = cfg.cache / f"{name}.zarr"
@@ -193,8 +239,8 @@ def recording(name: str, cfg: FigureConfig):
     config = task_config(task, cfg.world, **overrides)
     batch = make_trials(task, n_trials, "test", cfg.seed, config=config)
     extra = baseline_estimates(batch, which, cfg.particles) if which else None
-    rec = hp.record(net, batch, baselines=extra, checkpoint=network, config=config,
-                    session_id=f"paper-{name}")
+    rec = hp.record(net, batch, baselines=extra, checkpoint=net_path.name, config=config,
+                    session_id=f"paper-{name}-{cfg.run}")
     rec.attrs["paper_key"] = key
     rec.attrs["paper_dataset"] = name
     cfg.cache.mkdir(parents=True, exist_ok=True)
@@ -241,27 +287,35 @@ def jsonable(obj):
 
 
 def save(fig, name: str, numbers: dict, cfg: FigureConfig, out: Path) -> None:
-    """Write ``<out>/<name>.png``, ``.pdf`` and ``.json`` (the plotted numbers)."""
+    """Write ``<out>/<name>.png``, ``.pdf`` and ``.json`` (the plotted numbers), each
+    atomically."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out / f"{name}.png", dpi=130)
-    fig.savefig(out / f"{name}.pdf")
+    save_figure(fig, out / f"{name}.png", dpi=130)
+    save_figure(fig, out / f"{name}.pdf")
     plt.close(fig)
-    payload = {"figure": name, "size": cfg.numbers(), "hippo_probe": hp.__version__,
-               "networks": network_info(), **numbers}
-    (out / f"{name}.json").write_text(json.dumps(jsonable(payload), indent=1))
+    payload = {"figure": name, "size": cfg.numbers(), "run": cfg.run,
+               "hippo_probe": hp.__version__, "networks": network_info(cfg), **numbers}
+    write_text(out / f"{name}.json", json.dumps(jsonable(payload), indent=1),
+               what="figure data", overwrite=True)
     print(f"  wrote {out / name}.png/.pdf/.json")
 
 
-def network_info() -> dict:
-    """Training state of the shipped networks (steps done, finished or not)."""
+def network_info(cfg: FigureConfig) -> dict:
+    """Training state of the run's networks (steps done, finished or not), by name."""
     from hippo_probe.pretrained import HERE
     info = {}
-    for p in sorted(HERE.glob("*.log.json")):
-        log = json.loads(p.read_text())
-        info[p.name.removesuffix(".log.json")] = {
+    for network in sorted({network for network, *_ in RECORDINGS.values()}):
+        name = cfg.network(network)
+        stem = name if cfg.network_seed == 0 else f"{name}_seed{cfg.network_seed}"
+        path = HERE / f"{stem}.log.json"
+        if not path.exists():
+            continue
+        log = json.loads(path.read_text())
+        info[stem] = {
             "steps_done": log.get("steps_done"), "steps_budget": log["config"]["steps"],
-            "finished": log.get("finished"), "wall_time_s": log.get("wall_time_s"),
+            "finished": log.get("finished"), "stopped": log.get("stopped"),
+            "wall_time_s": log.get("wall_time_s"),
             "base_network_steps": (log.get("base_network") or {}).get("steps_done"),
             "base_network": (log.get("base_network") or {}).get("init_from")}
     return info

@@ -12,6 +12,7 @@ import json
 import math
 import re
 from pathlib import Path
+from typing import NamedTuple
 
 from ._repository import repository_file
 
@@ -52,8 +53,20 @@ def _ratio(a, b):
     return None if a is None or b is None or b == 0 else a / b
 
 
+class Claim(NamedTuple):
+    """One quantitative claim of the study and what one set of figures says of it."""
+
+    claim: str
+    paper: str
+    measured: str                   # the numbers, in words
+    verdict: str                    # by the rule printed with it
+    headline: dict                  # label -> number: what the table shows per seed
+    study: dict = {}                # label -> the study's number, where it gives one
+
+
 def rows(fig):
-    """(claim, paper, this project, verdict) for every quantitative claim of the study."""
+    """A :class:`Claim` for every quantitative claim of the study, from one run's figures
+    (``fig["fig2"]`` ... ``fig["fig5"]``: their JSON)."""
     f2, f3, f4, f5 = (fig.get(k, {}) for k in ("fig2", "fig3", "fig4", "fig5"))
     n2, n3 = f2.get("n_trials"), f3.get("size", {}).get("trials")
     slam_n = f3.get("size", {}).get("slam_trials")
@@ -61,20 +74,21 @@ def rows(fig):
     pf_loc = _get(f2, "summary", "particle filter (oracle)", "200s")
     net_loc = _get(f2, "summary", "network", "200s")
     r = _get(f2, "summary", "network / PF error, t > 100 s")
-    yield ("Fig. 2: the localization network is about as good as the optimal (oracular) "
+    yield Claim("Fig. 2: the localization network is about as good as the optimal (oracular) "
            "particle filter in its familiar arena",
            "network ≈ PF",
            f"network / PF error (mean over t > 100 s) = {_fmt(r)}; at 200 s: network "
            f"{_fmt(net_loc, '.3f')} m, PF {_fmt(pf_loc, '.3f')} m ({n2} test trials)",
            _verdict(r is not None and r <= 1.2, r is not None and r <= 2,
-                    "ratio ≤ 1.2; partly ≤ 2"))
+                    "ratio ≤ 1.2; partly ≤ 2"),
+           {"network / PF, t > 100 s": r}, {"network / PF, t > 100 s": 1.0})
 
     gen = _get(f3, "A_generalized_error") or {}
     r = _get(f3, "A_ratio_network_to_pf_t_gt_100s")
     net_200 = (gen.get("network") or [None])[-1]
     pi_200 = (gen.get("path integration") or [None])[-1]
     beats_pi = None if net_200 is None or pi_200 is None else net_200 < 0.75 * pi_200
-    yield ("Fig. 3A: in novel arenas the generalized network is within ~1.5x of the "
+    yield Claim("Fig. 3A: in novel arenas the generalized network is within ~1.5x of the "
            "oracular PF and far better than path integration",
            "≈ 1.5x PF (read from the main text); << PI",
            f"network / PF error (t > 100 s) = {_fmt(r)}; at 200 s: network "
@@ -83,27 +97,31 @@ def rows(fig):
            f"{_fmt(pi_200, '.3f')} m, naive Bayes "
            f"{_fmt((gen.get('naive Bayes') or [None])[-1], '.3f')} m ({n3} trials)",
            _verdict(bool(beats_pi) and r is not None and r <= 2, bool(beats_pi),
-                    "ratio ≤ 2 and error < 0.75 PI at 200 s; partly: only the latter"))
+                    "ratio ≤ 2 and error < 0.75 PI at 200 s; partly: only the latter"),
+           {"network / PF, t > 100 s": r, "network / PI, 200 s": _ratio(net_200, pi_200)},
+           {"network / PF, t > 100 s": 1.5})
 
     acc = _get(f3, "C_accuracy_at") or {}
     a200 = acc.get("200s")
-    yield ("Fig. 3C: the specialized network identifies its arena (of 100) with accuracy "
+    yield Claim("Fig. 3C: the specialized network identifies its arena (of 100) with accuracy "
            "near 100% within 200 s",
            "≈ 100% by 200 s",
            "accuracy at 50/100/200 s = " + (", ".join(_fmt(v, ".3f") for v in acc.values())
                                              if acc else "n/a") + f" (chance 0.01; {n3} trials)",
            _verdict(a200 is not None and a200 >= 0.9, a200 is not None and a200 >= 0.5,
-                    "≥ 0.9 at 200 s; partly ≥ 0.5"))
+                    "≥ 0.9 at 200 s; partly ≥ 0.5"),
+           {"accuracy, 200 s": a200}, {"accuracy, 200 s": 1.0})
 
     ro = _get(f3, "F_readout_accuracy_at") or {}
     r200 = ro.get("200s")
-    yield ("Fig. 3F: retraining only the readout of the generalized network classifies "
+    yield Claim("Fig. 3F: retraining only the readout of the generalized network classifies "
            "the arenas at about 85%",
            "≈ 85%",
            "accuracy at 50/100/200 s = " + (", ".join(_fmt(v) for v in ro.values())
                                              if ro else "n/a") + f" ({n3} trials)",
            _verdict(r200 is not None and r200 >= 0.7, r200 is not None and r200 >= 0.3,
-                    "≥ 0.7 at 200 s; partly ≥ 0.3"))
+                    "≥ 0.7 at 200 s; partly ≥ 0.3"),
+           {"accuracy, 200 s": r200}, {"accuracy, 200 s": 0.85})
 
     slam = sorted((int(k.split("_")[2]), v) for k, v in f3.items()
                   if k.startswith("E_pfslam_"))
@@ -117,7 +135,7 @@ def rows(fig):
     top = _get(f3, f"last20s_pfslam_{slam[-1][0]}") if slam else None
     acc_ok = bool(net and top) and net["accuracy"] >= 0.8 * top["accuracy"]
     err_ok = bool(net and top) and net["error"] <= 1.25 * top["error"]
-    yield ("Fig. 3D-E: the specialized network is comparable to a PF-SLAM with 10,000 "
+    yield Claim("Fig. 3D-E: the specialized network is comparable to a PF-SLAM with 10,000 "
            "particles",
            "≈ PF-SLAM 10k",
            f"mean over 180-200 s, on {slam_n} trials — network: accuracy "
@@ -126,7 +144,10 @@ def rows(fig):
            f"{_fmt((top or {}).get('error'), '.3f')} m. At 200 s: PF-SLAM {slam_txt or 'n/a'}",
            _verdict(acc_ok and err_ok, acc_ok or err_ok,
                     "accuracy ≥ 0.8 × and error ≤ 1.25 × PF-SLAM 10k's; partly: one of "
-                    "the two"))
+                    "the two"),
+           {"accuracy / PF-SLAM's": _ratio(net.get("accuracy"), (top or {}).get("accuracy")),
+            "error / PF-SLAM's": _ratio(net.get("error"), (top or {}).get("error"))},
+           {"accuracy / PF-SLAM's": 1.0, "error / PF-SLAM's": 1.0})
 
     dims = {k: v for k, v in (_get(f5, "C_dimension") or {}).items() if v is not None}
     # the study's text: "The localization-only network has a dimension D=5.5 ... the
@@ -136,18 +157,19 @@ def rows(fig):
     ordered = bool(dims) and max(dims, key=dims.get) == max(paper, key=paper.get)
     n_dim = min((_get(f5, "C_n_points") or {}).values(), default=None)
     bound = 2 * math.log10(n_dim) if n_dim else None
-    yield ("Fig. 5C: correlation dimension of the hidden-state trajectories",
+    yield Claim("Fig. 5C: correlation dimension of the hidden-state trajectories",
            "5.5 / 5.6 / 8.5 (localization / specialized / generalized, the study's text)",
            (" / ".join(f"{k} {_fmt(v, '.1f')}" for k, v in dims.items()) or "n/a")
            + (f" ({n_dim:,} states each; values near 2 log10 N = {bound:.1f} "
               "(Eckmann & Ruelle 1992) are lower bounds)" if bound else ""),
            _verdict(bool(close) and all(close), ordered,
-                    "each within 20%; partly: the generalized network highest"))
+                    "each within 20%; partly: the generalized network highest"),
+           {f"D {k}": dims.get(k) for k in paper}, {f"D {k}": v for k, v in paper.items()})
 
     r2 = _get(f5, "A_r2") or {}
     r2_t = _get(f5, "A_r2_time_in_trial_alone") or {}
     gain = [r2[k] - r2_t.get(k, 0.0) for k in ("xx", "yy") if k in r2]
-    yield ("Fig. 5A: the PF's posterior covariance is linearly decodable from the "
+    yield Claim("Fig. 5A: the PF's posterior covariance is linearly decodable from the "
            "localization network's units",
            "decodable",
            "cross-validated R² (xx, yy, xy) = " + ", ".join(_fmt(v) for v in r2.values())
@@ -157,29 +179,33 @@ def rows(fig):
                     and min(gain) >= 0.1,
                     any(r2[k] - r2_t.get(k, 0.0) >= 0.05 for k in r2),
                     "R² ≥ 0.5 for xx and yy, ≥ 0.1 above time in trial alone; partly: "
-                    "≥ 0.05 above it for one component"))
+                    "≥ 0.05 above it for one component"),
+           {f"R² {k} − time alone": r2[k] - r2_t.get(k, 0.0) if k in r2 else None
+            for k in ("xx", "yy")})
 
     rho, p = _get(f4, "E", "rank_correlation"), _get(f4, "E", "rank_correlation_p")
-    yield ("Fig. 4E: units projecting strongly onto the classifier are less spatially "
+    yield Claim("Fig. 4E: units projecting strongly onto the classifier are less spatially "
            "selective (negative correlation)",
            "negative",
            f"Spearman rho = {_fmt(rho)} (p = {_fmt(p, '.2g')})",
            _verdict(rho is not None and rho < 0 and p is not None and p < 0.05,
-                    rho is not None and rho < 0, "rho < 0 with p < 0.05; partly: rho < 0"))
+                    rho is not None and rho < 0, "rho < 0 with p < 0.05; partly: rho < 0"),
+           {"Spearman rho": rho})
 
     mvl = _get(f4, "C_mean_vector_length", "median_all_units")
     sig = _get(f4, "C_mean_vector_length", "fraction_significant_p_lt_0.01")
-    yield ("Fig. 4C: head-direction tuning is weak",
+    yield Claim("Fig. 4C: head-direction tuning is weak",
            "weak",
            f"specialized network: median mean vector length {_fmt(mvl)}, max "
            f"{_fmt(_get(f4, 'C_mean_vector_length', 'max'))}; "
            f"{_fmt(sig)} of units significant (p < 0.01, time-shift shuffles): tuned, "
            "but weakly (mouse ADn cells: median R 0.84, see the network-vs-rodent table)",
-           _verdict(mvl is not None and mvl < 0.2, rule="median R < 0.2"))
+           _verdict(mvl is not None and mvl < 0.2, rule="median R < 0.2"),
+           {"median R": mvl})
 
     same_a, same_b = (_get(f4, k, "stability_same_arena_median") for k in "AB")
     across_a, across_b = (_get(f4, k, "correlation_across_arenas_median") for k in "AB")
-    yield ("Fig. 4A-B: place fields are stable across trajectories in the same arena",
+    yield Claim("Fig. 4A-B: place fields are stable across trajectories in the same arena",
            "stable",
            f"median rate-map correlation, same arena vs other arena: specialized "
            f"{_fmt(same_a)} vs {_fmt(across_a)}, generalized {_fmt(same_b)} vs "
@@ -189,7 +215,8 @@ def rows(fig):
                     same_a is not None and same_a >= 0.7,
                     "same-arena median ≥ 0.7 and ≥ 0.1 above the other arena's for the "
                     "specialized network; partly: stable only. Smooth gradient-like maps "
-                    "are stable trivially (notes)"))
+                    "are stable trivially (notes)"),
+           {"same arena": same_a, "other arena": across_a})
 
     d = _get(f4, "D_similarity") or {}
     dc = _get(f4, "D_similarity_units_centred") or {}
@@ -198,7 +225,7 @@ def rows(fig):
     # vectors: the per-unit rate-map correlation across arenas (Fig. 4A) must be low too
     pv_ok = across is not None and within is not None and across < 0.3 and within > 0.7
     maps_ok = across_a is not None and across_a < 0.5
-    yield ("Fig. 4D: global remapping between arenas",
+    yield Claim("Fig. 4D: global remapping between arenas",
            "across ≈ 0, within high",
            f"mean population-vector correlation, each unit's mean removed: within "
            f"{_fmt(within)}, across {_fmt(across)} (labels shuffled: "
@@ -208,7 +235,8 @@ def rows(fig):
            _verdict(pv_ok and maps_ok, pv_ok,
                     "population vectors across < 0.3 and within > 0.7, and units' maps "
                     "across arenas < 0.5; partly: population vectors only, i.e. rate "
-                    "remapping (units change their mean rate by arena, keep their map)"))
+                    "remapping (units change their mean rate by arena, keep their map)"),
+           {"PV across": across, "maps across": across_a})
 
 
 def error_table(fig):
@@ -232,15 +260,97 @@ def error_table(fig):
     return lines
 
 
+#: A run's folder under the figures' output: ``<world>-seed<k>``.
+_RUN = re.compile(r"(?P<world>[a-z]+)-seed(?P<seed>\d+)")
+
+
+def read_runs(figures_dir) -> dict:
+    """The figures' JSON of every run under ``figures_dir``: ``{world: {seed: {figN:
+    data}}}``, worlds in the order of :data:`~hippo_probe.paper.config.WORLDS`."""
+    from .config import WORLDS
+
+    found = {}
+    for folder in sorted(Path(figures_dir).iterdir()) if Path(figures_dir).is_dir() else ():
+        m = _RUN.fullmatch(folder.name)
+        figs = {p.stem: json.loads(p.read_text()) for p in sorted(folder.glob("fig*.json"))}
+        if m and folder.is_dir() and figs:
+            found.setdefault(m["world"], {})[int(m["seed"])] = figs
+    order = [w for w in WORLDS if w in found] + sorted(set(found) - set(WORLDS))
+    return {w: dict(sorted(found[w].items())) for w in order}
+
+
+def seed_mean(values: list):
+    """The leafwise mean over seeds of the same JSON structure: numbers are averaged
+    (None, i.e. NaN, left out), lists of equal length element by element; anything else
+    is the first seed's."""
+    first = values[0]
+    if isinstance(first, dict):
+        return {k: seed_mean([v[k] for v in values if isinstance(v, dict) and k in v])
+                for k in first}
+    if isinstance(first, list) and all(isinstance(v, list) and len(v) == len(first)
+                                       for v in values):
+        return [seed_mean(list(col)) for col in zip(*values)]
+    if _is_number(first) or first is None:
+        numbers = [v for v in values if _is_number(v)]
+        if numbers and all(v == numbers[0] for v in numbers):
+            return numbers[0]              # a size, a count: kept as it was
+        return sum(numbers) / len(numbers) if numbers else None
+    return first
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _spread(values: list) -> str:
+    """``mean (min–max)`` of one headline number over seeds; ``n/a`` if none."""
+    values = [v for v in values if v is not None and math.isfinite(v)]
+    if not values:
+        return "n/a"
+    mean = sum(values) / len(values)
+    return f"{mean:.2f}" if len(values) == 1 else \
+        f"{mean:.2f} ({min(values):.2f}–{max(values):.2f})"
+
+
+def _word(verdict: str) -> str:
+    return verdict.split(" (")[0]
+
+
+def world_columns(by_seed: dict) -> list[dict]:
+    """Per claim of one world: its headline numbers over seeds, the verdict on the seed
+    means and how many seeds meet it alone."""
+    seeds = list(by_seed)
+    mean = rows({name: seed_mean([by_seed[k].get(name, {}) for k in seeds])
+                 for name in ("fig2", "fig3", "fig4", "fig5")})
+    per_seed = [list(rows(by_seed[k])) for k in seeds]
+    out = []
+    for i, claim in enumerate(mean):
+        numbers = "; ".join(
+            f"{label} {_spread([r[i].headline.get(label) for r in per_seed])}"
+            for label in claim.headline)
+        agree = sum(_word(r[i].verdict) == _word(claim.verdict) for r in per_seed)
+        verdict = _word(claim.verdict) + (f", {agree} of {len(seeds)} seeds"
+                                          if len(seeds) > 1 else "")
+        out.append({"claim": claim, "numbers": numbers, "verdict": verdict})
+    return out
+
+
 def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES) -> Path:
     """Write RESULTS.md: the study's claims beside the numbers of the figures' JSON.
+
+    One column per world (the darkness world, the study's, first): each claim's headline
+    numbers as the mean over the networks' training seeds with their range, ``mean
+    (min–max)``; the verdict by the claim's rule applied to the seed means of every
+    number (:func:`seed_mean`), with how many seeds meet that verdict on their own. The
+    details (every number behind a verdict) follow per world, as seed means.
 
     Parameters
     ----------
     figures_dir : str or os.PathLike
-        Folder holding the figures' ``fig*.json`` (a missing figure's claims read "n/a").
+        Folder of the runs, ``<world>-seed<k>/fig*.json`` (a missing figure's claims
+        read "n/a").
     out_path : str or os.PathLike
-        The Markdown file written (replaced).
+        The Markdown file written (replaced, atomically).
     notes_path : str or os.PathLike or None, optional
         Hand-written explanations appended to the table; default the repository's
         ``paper_figures/RESULTS_notes.md``; ``None``: no notes.
@@ -257,6 +367,9 @@ def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES) -> Path:
     ValueError
         The notes hold unfilled ``{PLACEHOLDERS}``.
     """
+    from .._atomic import write_text
+    from .config import WORLDS
+
     figures_dir, out_path = Path(figures_dir), Path(out_path)
     if notes_path is _REPOSITORY_NOTES:
         notes_path = repository_file(NOTES, argument="notes_path")
@@ -264,37 +377,61 @@ def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES) -> Path:
         notes_path = Path(notes_path)
         if not notes_path.is_file():
             raise FileNotFoundError(f"notes {notes_path} not found")
-    figs = {p.stem: json.loads(p.read_text()) for p in figures_dir.glob("fig*.json")}
-    size = next((f["size"]["name"] for f in figs.values()), "?")
-    # the newest figure's record of the shipped networks
-    newest = max(figures_dir.glob("fig*.json"), key=lambda p: p.stat().st_mtime,
-                 default=None)
-    nets = (figs[newest.stem].get("networks") if newest else None) or {}
+    runs = read_runs(figures_dir)
+    worlds = list(dict.fromkeys([*WORLDS, *runs]))
+    columns = {w: world_columns(runs[w]) if w in runs else None for w in worlds}
+    any_figs = next((f for by_seed in runs.values() for f in by_seed.values()), {})
+    size = next((f["size"]["name"] for f in any_figs.values()), "?")
     lines = ["# The paper's claims beside this project's measurements", "",
-             f"Generated by `python paper_figures/results.py` from the figure data "
-             f"(`figures/fig*.json`, data size `{size}`).", "",
-             "Shipped networks used: " + "; ".join(
-                 f"{k}: {v['steps_done']} of {v['steps_budget']} steps"
-                 f"{'' if v.get('finished') else ' (training not finished)'}"
-                 + (f" after {v['base_network_steps']} steps of the base network "
-                    f"{v.get('base_network') or ''}".rstrip()
-                    if v.get("base_network_steps") else "")
-                 for k, v in nets.items()), "",
-             "| claim (Kanitscheider & Fiete 2017) | paper | this project | verdict (rule) |",
-             "| --- | --- | --- | --- |"]
-    lines += [f"| {c} | {p} | {m} | {v} |" for c, p, m, v in rows(figs)]
-    table = error_table(figs)
-    if len(table) > 2:
-        lines += ["", "Mean Euclidean error (m) at 50 / 100 / 200 s on the same test trials "
-                  f"({_get(figs, 'fig2', 'n_trials')} per network):", "", *table]
-    acc = [(name, _get(figs, "fig3", key)) for name, key in
-           (("specialized network", "C_accuracy_at"),
-            ("generalized network, retrained readout", "F_readout_accuracy_at"))]
-    acc = [(n, a) for n, a in acc if a]
-    if acc:
-        lines += ["", "Arena classification accuracy at 50 / 100 / 200 s (chance 0.01): " +
-                  "; ".join(f"{n} " + " / ".join(f"{a[k]:.2f}" for k in ("50s", "100s", "200s"))
-                            for n, a in acc) + "."]
+             f"Generated by `hippo-probe figures` (data size `{size}`) from the figures of "
+             "every shipped run: the networks of each world, one run per training seed "
+             "(`<world>-seed<k>/fig*.json`).", ""]
+    for w in worlds:
+        if w not in runs:
+            lines.append(f"- {w} world: no networks shipped yet.")
+            continue
+        for seed, figs in runs[w].items():
+            nets = next((f.get("networks") for f in figs.values() if f.get("networks")), {})
+            lines.append(f"- {w} world, seed {seed}: " + ("; ".join(
+                f"{k} {v['steps_done']} of {v['steps_budget']} steps"
+                + ("" if v.get("finished") else " (training not finished)")
+                for k, v in nets.items()) or "networks n/a"))
+    head = ["claim (Kanitscheider & Fiete 2017)", "paper"]
+    for w in worlds:
+        head += [f"{w} world: mean (min–max) over seeds", f"verdict, {w}"]
+    lines += ["", "| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+    for i, claim in enumerate(rows({})):
+        cells = [claim.claim, claim.paper]
+        for w in worlds:
+            col = columns[w]
+            cells += ["not trained yet", "—"] if col is None else \
+                [col[i]["numbers"], col[i]["verdict"]]
+        lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "Verdicts apply each claim's rule (below) to the seed means; \"k of n "
+              "seeds\" counts the seeds that reach the same verdict on their own."]
+    for w in worlds:
+        if columns[w] is None:
+            continue
+        mean = {name: seed_mean([f.get(name, {}) for f in runs[w].values()])
+                for name in ("fig2", "fig3", "fig4", "fig5")}
+        lines += ["", f"## Details, {w} world (means over {len(runs[w])} seed"
+                      f"{'s' if len(runs[w]) > 1 else ''})", "",
+                  "| claim | this project | verdict (rule) |", "| --- | --- | --- |"]
+        lines += [f"| {c['claim'].claim} | {c['claim'].measured} | {c['claim'].verdict} |"
+                  for c in columns[w]]
+        table = error_table(mean)
+        if len(table) > 2:
+            lines += ["", "Mean Euclidean error (m) at 50 / 100 / 200 s on the same test "
+                      f"trials ({_get(mean, 'fig2', 'n_trials')} per network):", "", *table]
+        acc = [(name, _get(mean, "fig3", key)) for name, key in
+               (("specialized network", "C_accuracy_at"),
+                ("generalized network, retrained readout", "F_readout_accuracy_at"))]
+        acc = [(n, a) for n, a in acc if a]
+        if acc:
+            lines += ["", "Arena classification accuracy at 50 / 100 / 200 s (chance "
+                      "0.01): " + "; ".join(f"{n} " + " / ".join(
+                          f"{a[k]:.2f}" for k in ("50s", "100s", "200s")) for n, a in acc)
+                      + "."]
     if notes_path is not None:
         text = notes_path.read_text()
         unfilled = sorted(set(re.findall(r"\{[A-Z_]+\}", text)))
@@ -302,5 +439,5 @@ def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES) -> Path:
             raise ValueError(f"{notes_path} has unfilled placeholders {unfilled}")
         lines += ["", text]
     out_path.parent.mkdir(parents=True, exist_ok=True)
-    out_path.write_text("\n".join(lines) + "\n")
+    write_text(out_path, "\n".join(lines) + "\n", what="results table")
     return out_path

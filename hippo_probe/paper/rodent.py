@@ -21,6 +21,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import hippo_probe as hp
+from hippo_probe._atomic import save_figure, write_text
 
 from . import config as C
 
@@ -100,8 +101,9 @@ def make(cfg, out, session=None):
     axes[1].legend(frameon=False, fontsize=8, loc="center right")  # the empty corner
     fig.suptitle("Same analyses, same recording layout: mouse cells vs network units")
     out.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out / "network_vs_rodent.png", dpi=130)
-    fig.savefig(out / "network_vs_rodent.pdf")
+    save_figure(fig, out / "network_vs_rodent.png", dpi=130)
+    save_figure(fig, out / "network_vs_rodent.pdf")
+    plt.close(fig)
 
     def med(x):
         x = x[np.isfinite(x)]
@@ -134,11 +136,12 @@ def make(cfg, out, session=None):
               "selectivity (variance explained by position) of ~8 ms spike counts (120 Hz "
               "samples) is capped by Poisson noise while the network's h is noise-free — "
               "a higher value for the network does not make its units 'more spatial' than CA1 cells."]
-    (out / "network_vs_rodent.md").write_text("\n".join(lines) + "\n")
+    write_text(out / "network_vs_rodent.md", "\n".join(lines) + "\n", what="table")
     numbers = {"size": cfg.name, "table": table,
                "per_unit": {n: {k: v for k, v in g.items() if isinstance(v, np.ndarray)}
                             for n, g in groups.items()}}
-    (out / "network_vs_rodent.json").write_text(json.dumps(C.jsonable(numbers), indent=1))
+    write_text(out / "network_vs_rodent.json", json.dumps(C.jsonable(numbers), indent=1),
+               what="figure data")
     print("\n".join(lines))
     print(f"wrote {out}/network_vs_rodent.png/.pdf/.md/.json")
     return numbers

@@ -33,20 +33,19 @@ def check_repository(repository=None) -> Path:
     return Path(repository)
 
 
-def refresh_tracked(out, names, *, repository=None) -> list[Path]:
-    """Copy the figures ``names`` and RESULTS.md just made in ``out`` over the repository's
-    tracked copies.
+def refresh_tracked(figures, results, *, repository=None) -> list[Path]:
+    """Copy freshly made figures and RESULTS.md over the repository's tracked copies.
 
-    Only figures that already have a tracked copy are copied (the README shows a chosen
-    few); RESULTS.md is required.
+    Only figures that already have a tracked copy (of the same file name) are copied (the
+    README shows a chosen few); RESULTS.md is required.
 
     Parameters
     ----------
-    out : str or os.PathLike
-        Folder of the figures (``<name>.png``) and ``RESULTS.md``.
-    names : iterable of str
-        The figures made in ``out`` by this run (a stale file of an earlier run is never
-        copied).
+    figures : iterable of path
+        The figures (``<name>.png``) made by this run (a stale file of an earlier run is
+        never copied).
+    results : path
+        The RESULTS.md made by this run.
     repository : str or os.PathLike, optional
         The clone whose copies are refreshed; default the one the package runs from.
 
@@ -58,14 +57,13 @@ def refresh_tracked(out, names, *, repository=None) -> list[Path]:
     Raises
     ------
     FileNotFoundError
-        No clone of the repository, or ``out`` lacks RESULTS.md.
+        No clone of the repository, or no ``results``.
     """
-    root, out = check_repository(repository), Path(out)
-    results = out / "RESULTS.md"
+    root, results = check_repository(repository), Path(results)
     if not results.is_file():
         raise FileNotFoundError(f"{results} not found: RESULTS.md is written before the "
                                 f"tracked copies are refreshed")
-    pairs = [(out / f"{name}.png", root / PNG / f"{name}.png") for name in names]
+    pairs = [(Path(new), root / PNG / Path(new).name) for new in figures]
     pairs = [(new, old) for new, old in pairs if old.exists() and new.exists()]
     pairs.append((results, root / RESULTS))
     for new, old in pairs:

@@ -47,6 +47,7 @@ _LAZY_ATTRS = {
     "context_cells": "hippo_probe.analysis",
     "decode_covariance": "hippo_probe.analysis",
     "correlation_dimension": "hippo_probe.analysis",
+    "intrinsic_dimension": "hippo_probe.analysis",
     "localization_error": "hippo_probe.analysis",
     "classification_accuracy": "hippo_probe.analysis",
     "AnalysisWarning": "hippo_probe.analysis",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 #: extra that brings each optional dependency
 EXTRAS = {"torch": "model", "pynwb": "nwb", "distributed": "distributed",
-          "pynapple": "pynapple"}
+          "pynapple": "pynapple", "skdim": "dimension"}
 
 
 def missing(dependency: str, what: str) -> ModuleNotFoundError:

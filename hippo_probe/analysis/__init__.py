@@ -13,6 +13,7 @@ from .context_cells import context_cells
 from .correlation_dimension import correlation_dimension
 from .decode_covariance import decode_covariance
 from .head_direction_tuning import head_direction_tuning
+from .intrinsic_dimension import intrinsic_dimension
 from .localization_error import localization_error
 from .place_field_stability import place_field_stability
 from .ratemaps import ratemaps
@@ -35,6 +36,7 @@ __all__ = [
     "correlation_dimension",
     "decode_covariance",
     "head_direction_tuning",
+    "intrinsic_dimension",
     "localization_error",
     "place_field_stability",
     "ratemaps",

@@ -487,6 +487,37 @@ class CellClassConfig:
     precedence: tuple = ("conjunctive", "grid", "border", "place", "head_direction",
                          "speed")
 
+@dataclass(frozen=True)
+class IntrinsicDimensionConfig:
+    """Defaults of :func:`intrinsic_dimension` (scikit-dimension's nearest-neighbour
+    estimators beside Grassberger-Procaccia).
+
+    Attributes
+    ----------
+    estimators : tuple of str
+        TwoNN (Facco et al. 2017: the ratio of second to first neighbour distances) and
+        MLE (Levina & Bickel 2005: the likelihood of the first ``k`` neighbour
+        distances): two estimators with no scaling range to choose, unlike C(r).
+    n_neighbors : int
+        MLE uses the 20 nearest neighbours, the top of Levina & Bickel's suggested 10-20.
+    twonn_discard : float
+        TwoNN drops the 10% largest ratios before its fit (Facco et al. 2017).
+    max_points, theiler, transient, seed
+        As for :class:`CorrelationDimensionConfig`, so that both see the same states:
+        neighbours closer in time than ``theiler`` samples within a trial are skipped
+        (otherwise the nearest neighbour of a state on a smooth trajectory is its own
+        near past, and the estimate is that of a curve, ~1).
+    """
+
+    estimators: tuple = ("TwoNN", "MLE")
+    n_neighbors: int = 20
+    twonn_discard: float = 0.1
+    max_points: int = 4000
+    theiler: int = 10
+    transient: float = 0.1
+    seed: int = 0
+
+
 CONVENTIONS = RecordingConventions()
 COMPUTE = ComputeConfig()
 RATEMAP = RateMapConfig()
@@ -497,6 +528,7 @@ STABILITY = StabilityConfig()
 REMAPPING = RemappingConfig()
 DECODING = DecodingConfig()
 CORRELATION_DIMENSION = CorrelationDimensionConfig()
+INTRINSIC_DIMENSION = IntrinsicDimensionConfig()
 PLACE_FIELD = PlaceFieldConfig()
 GRID = GridConfig()
 BORDER = BorderConfig()

@@ -118,7 +118,7 @@ def make(cfg, out):
     mvl = hd.mean_vector_length.values.ravel()
     show = np.argsort(-np.nan_to_num(mvl))[:20]
     theta = hd.direction.values
-    top[1].suptitle("C  head-direction tuning of the 20 most tuned units (specialized "
+    top[1].suptitle("C1  head-direction tuning of the 20 most tuned units (specialized "
                     "network, 60 bins;\nradius from 0 = the unit's minimum, 0° to the right)",
                     fontsize=10)
     for k, u in enumerate(show):
@@ -143,7 +143,7 @@ def make(cfg, out):
     ax.hist(mvl, bins=30, color="gray")
     ax.set_xlabel("mean vector length R (from the tuning curve)")
     ax.set_ylabel("units")
-    ax.set_title("C (cont.)  R of all units (specialized network)\n"
+    ax.set_title("C2  R of all units (specialized network)\n"
                  f"{np.mean(hd.p_value.values < 0.01):.0%} significant: p < 0.01 against "
                  f"{hd.attrs['n_shuffles']} time-shift shuffles", fontsize=9)
 
@@ -175,21 +175,19 @@ def make(cfg, out):
     ax.legend(frameon=False, fontsize=7)
 
     ctx = hp.context_cells(many)
-    ax = bottom[1].add_subplot(1, 1, 1)
+    ax, scatter = bottom[1].subplots(1, 2)
     sel = ctx.spatial_selectivity.values
     ax.hist(sel[np.isfinite(sel)], bins=30, color="tab:blue")
     ax.set_xlabel("spatial selectivity (variance explained by position)")
     ax.set_ylabel("units")
-    ax.set_title("E spatial selectivity (specialized network)", fontsize=9)
-    inset = ax.inset_axes([0.6, 0.45, 0.37, 0.5])
-    inset.scatter(ctx.projection_strength, sel, s=4, color="k")
-    inset.set_xlabel("projection strength onto classifier", fontsize=7)
-    inset.set_ylabel("selectivity", fontsize=7)
-    inset.tick_params(labelsize=6)
+    ax.set_title("E1  spatial selectivity (specialized network)", fontsize=9)
     rho = ctx.attrs.get("rank_correlation")
     p = ctx.attrs.get("rank_correlation_p")
-    inset.text(0.98, 0.97, f"Spearman ρ = {rho:.2f}, p = {p:.2g}, n = {np.isfinite(sel).sum()}",
-               transform=inset.transAxes, ha="right", va="top", fontsize=7)
+    scatter.scatter(ctx.projection_strength, sel, s=6, color="k")
+    scatter.set_xlabel("projection strength onto the arena classifier")
+    scatter.set_ylabel("spatial selectivity")
+    scatter.set_title(f"E2  selectivity vs projection: Spearman ρ = {rho:.2f}\n"
+                      f"(p = {p:.2g}, n = {np.isfinite(sel).sum()} units)", fontsize=9)
     numbers["E"] = {"selectivity_median": float(np.nanmedian(sel)),
                     "rank_correlation": rho,
                     "rank_correlation_p": ctx.attrs.get("rank_correlation_p")}

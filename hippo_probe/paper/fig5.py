@@ -1,10 +1,12 @@
 """Figure 5: what the population encodes beyond position.
 
-A the particle filter's posterior covariance (Cxx, Cyy, Cxy) decoded linearly from the
-localization network's hidden units (cross-validated by trial); B the specialized
-network's posterior over the 100 arenas at a few moments early in a trial, and the mean
-probability it gives the true arena vs time; C the
-correlation dimension of each network's hidden-state trajectories.
+A1-A3 the particle filter's posterior covariance (Cxx, Cyy, Cxy) decoded linearly from
+the localization network's hidden units (cross-validated by trial); B1 the specialized
+network's posterior over the 100 arenas at a few moments early in a trial, B2 the mean
+probability it gives the true arena vs time; C1-C3 the correlation dimension of each
+network's hidden-state trajectories (Grassberger-Procaccia, with the local slope of C(r)),
+beside two nearest-neighbour estimators on the same states (TwoNN and MLE,
+scikit-dimension). Panel letters follow the study's (its 5A, 5B, 5C) with a number each.
 
 The builder of ``hippo-probe figures --only fig5`` and of the script
 ``paper_figures/fig5.py``; contract in :mod:`hippo_probe.paper`.
@@ -12,7 +14,6 @@ The builder of ``hippo-probe figures --only fig5`` and of the script
 
 import matplotlib.pyplot as plt
 import numpy as np
-import xarray as xr
 
 import hippo_probe as hp
 
@@ -36,15 +37,6 @@ def _r2_time_alone(truth, trial_time):
     return float(1 - np.sum((truth - others) ** 2) / np.sum((truth - truth.mean()) ** 2))
 
 
-def _true_class_probability(rec):
-    """Mean over trials of the probability given to each sample's true arena, vs time."""
-    env_ids = rec.environment_id.values
-    column = np.searchsorted(env_ids, rec.environment.values)
-    p = rec.class_probability.values[np.arange(rec.sizes["time"]), column]
-    p = xr.DataArray(p, dims="time", coords={"trial_time": ("time", rec.trial_time.values)})
-    return p.groupby("trial_time").mean()
-
-
 def make(cfg, out):
     """Draw the figure into ``out``; returns the numbers written to its JSON."""
     cfg = C.cached_under(cfg, out)
@@ -55,21 +47,26 @@ def make(cfg, out):
     fig, ax = plt.subplots(2, 4, figsize=(15, 7), constrained_layout=True)
 
     dec = hp.decode_covariance(loc, n_folds=min(5, loc.sizes["trial_id"]))
+    rng = np.random.default_rng(cfg.seed)
+    trial_length = float(C.step_times(loc)[-1])
     for k, comp in enumerate(["xx", "yy", "xy"]):
         a = ax[0, k]
         truth = loc.pf_cov.sel(cov=comp).values
         pred = dec.prediction.sel(cov=comp).values
-        ok = np.isfinite(truth) & np.isfinite(pred)
-        step = max(ok.sum() // 4000, 1)
-        # coloured by time in trial: the prior's broad covariance sits at the trial start
-        dots = a.scatter(truth[ok][::step], pred[ok][::step], s=2, alpha=0.4,
-                         c=loc.trial_time.values[ok][::step], cmap="viridis")
+        ok = np.flatnonzero(np.isfinite(truth) & np.isfinite(pred))
+        # 4,000 samples drawn uniformly over all trials and times (a stride would hit the
+        # same few times in every trial); coloured by time in trial: the prior's broad
+        # covariance sits at the trial start
+        shown = np.sort(rng.choice(ok, min(4000, ok.size), replace=False))
+        dots = a.scatter(truth[shown], pred[shown], s=2, alpha=0.4,
+                         c=loc.trial_time.values[shown], cmap="viridis",
+                         vmin=0, vmax=trial_length)
         lim = [np.nanmin(truth), np.nanmax(truth)]
         a.plot(lim, lim, color="tab:red", lw=0.8, label="identity")
         a.legend(frameon=False, fontsize=7, loc="upper left")
         r2 = float(dec.r2.sel(cov=comp))
         r2_time = _r2_time_alone(truth, loc.trial_time.values)
-        a.set_title(f"A  C{comp} (localization network): cross-validated R² = {r2:.2f}\n"
+        a.set_title(f"A{k + 1}  C{comp} (localization network): cross-validated R² = {r2:.2f}\n"
                     f"(time in trial alone: R² = {r2_time:.2f})", fontsize=9)
         numbers.setdefault("A_r2_time_in_trial_alone", {})[comp] = r2_time
         a.set_xlabel(f"particle filter C{comp} (m²)")
@@ -89,7 +86,7 @@ def make(cfg, out):
     a.axvline(true_env, color="k", ls=":", lw=0.8, label="true arena")
     a.set_xlabel("arena id")
     a.set_ylabel("network posterior")
-    a.set_title("B  arena posterior, one trial", fontsize=9)
+    a.set_title("B1  arena posterior, one trial", fontsize=9)
     a.legend(frameon=False, fontsize=7)
 
     for k, (name, rec) in enumerate((("localization", loc), ("generalized", gen),
@@ -103,13 +100,15 @@ def make(cfg, out):
         a.axvspan(lo, hi, color="tab:blue", alpha=0.15, label="scaling range")
         a.set_xlabel("log10 r")
         a.set_ylabel("log10 C(r)")
-        a.set_title(f"C  {name}: D = {res.attrs['dimension']:.2f} "
-                    f"({res.attrs['n_points']:,} states)", fontsize=9)
+        nn = hp.intrinsic_dimension(rec, max_points=cfg.dimension_samples)
+        nn_d = {str(e): float(v) for e, v in zip(nn.estimator.values, nn.dimension.values)}
+        a.set_title(f"C{k + 1}  {name}: D = {res.attrs['dimension']:.2f} "
+                    f"({res.attrs['n_points']:,} states)\n"
+                    + ", ".join(f"{e} {v:.1f}" for e, v in nn_d.items())
+                    + " (nearest neighbours, same states)", fontsize=9)
         # the local slope: a plateau at D over the scaling range is what makes D a dimension
         slope = a.twinx()
-        finite = np.isfinite(res.log_c.values)
-        lr, lc = res.log_r.values[finite], res.log_c.values[finite]
-        slope.plot(lr, np.gradient(lc, lr), color="tab:orange", lw=0.9,
+        slope.plot(res.log_r, res.local_slope, color="tab:orange", lw=0.9,
                    label="local slope")
         d = res.attrs["dimension"]
         if np.isfinite(d):
@@ -122,13 +121,15 @@ def make(cfg, out):
                  loc="upper left")
         numbers.setdefault("C_dimension", {})[name] = float(res.attrs["dimension"])
         numbers.setdefault("C_n_points", {})[name] = int(res.attrs["n_points"])
+        for e, v in nn_d.items():
+            numbers.setdefault(f"C_dimension_{e}", {})[name] = v
     a = ax[1, 3]
-    p_true = _true_class_probability(spec)
+    p_true = hp.classification_accuracy(spec).true_class_probability
     a.plot(p_true.trial_time, p_true, color="k", label="network")
     a.axhline(1 / spec.sizes["environment_id"], color="gray", ls=":", label="chance")
     a.set_xlabel("time in trial (s)")
     a.set_ylabel("posterior of the true arena")
-    a.set_title(f"B (cont.)  mean over {spec.sizes['trial_id']} trials", fontsize=9)
+    a.set_title(f"B2  mean over {spec.sizes['trial_id']} trials", fontsize=9)
     a.legend(frameon=False, fontsize=7)
     numbers["B_mean_true_class_probability_end"] = float(p_true[-1])
     fig.suptitle("Fig. 5 — uncertainty, arena identity and dimensionality in the population")

@@ -161,7 +161,10 @@ def rows(fig):
            "5.5 / 5.6 / 8.5 (localization / specialized / generalized, the study's text)",
            (" / ".join(f"{k} {_fmt(v, '.1f')}" for k, v in dims.items()) or "n/a")
            + (f" ({n_dim:,} states each; values near 2 log10 N = {bound:.1f} "
-              "(Eckmann & Ruelle 1992) are lower bounds)" if bound else ""),
+              "(Eckmann & Ruelle 1992) are lower bounds)" if bound else "")
+           + "".join(f"; {e} (same states): " + " / ".join(
+               f"{k} {_fmt(v, '.1f')}" for k, v in (_get(f5, f"C_dimension_{e}") or {}).items())
+               for e in ("TwoNN", "MLE") if _get(f5, f"C_dimension_{e}")),
            _verdict(bool(close) and all(close), ordered,
                     "each within 20%; partly: the generalized network highest"),
            {f"D {k}": dims.get(k) for k in paper}, {f"D {k}": v for k, v in paper.items()})

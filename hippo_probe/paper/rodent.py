@@ -82,23 +82,28 @@ def make(cfg, out, session=None):
                                  np.ones(net.sizes["unit"], bool)}, BIN_NETWORK)
     groups = {**mouse_sum, **net_sum}
 
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), constrained_layout=True)
+    fig, axes = plt.subplots(1, 4, figsize=(16, 3.8), constrained_layout=True)
     colors = {"mouse ADn": "tab:red", "mouse CA1": "tab:blue",
               "network (localization)": "k"}
-    for ax, key, label in zip(axes, ("mean_vector_length", "spatial_information",
-                                     "selectivity"),
-                              ("head-direction mean vector length R",
-                               "Skaggs information (mouse: bits/spike; network: bits per "
-                               "unit of activity)",
-                               "spatial selectivity (variance explained)")):
-        for name, g in groups.items():
+    mice = [n for n in groups if n.startswith("mouse")]
+    # Skaggs information is in bits per spike for spike counts and in bits per unit of
+    # activity for the network's hidden state: not one scale, so two axes
+    panels = [("mean_vector_length", "head-direction mean vector length R", list(groups)),
+              ("spatial_information", "Skaggs information (bits/spike)", mice),
+              ("spatial_information", "Skaggs information (bits per unit of activity)",
+               [n for n in groups if n not in mice]),
+              ("selectivity", "spatial selectivity (variance explained)", list(groups))]
+    for ax, (key, label, names) in zip(axes, panels):
+        for name in names:
+            g = groups[name]
             v = np.sort(g[key][np.isfinite(g[key])])
             if len(v):
                 ax.plot(v, np.arange(1, len(v) + 1) / len(v), drawstyle="steps-post",
                         color=colors[name], label=f"{name}, n = {g['n_units']}")
         ax.set_xlabel(label)
         ax.set_ylabel("cumulative fraction of units")
-    axes[1].legend(frameon=False, fontsize=8, loc="center right")  # the empty corner
+        ax.set_ylim(0, 1.02)
+    axes[0].legend(frameon=False, fontsize=8, loc="lower right")
     fig.suptitle("Same analyses, same recording layout: mouse cells vs network units")
     out.mkdir(parents=True, exist_ok=True)
     save_figure(fig, out / "network_vs_rodent.png", dpi=130)

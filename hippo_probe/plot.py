@@ -463,33 +463,56 @@ def remapping_cdf(sim, *, ax=None):
     return fig
 
 
-def error_curves(err, *, variables=("euclidean", "radial", "angular"), fig=None,
-                 axes=None):
+def error_curves(err, *, variables=("euclidean", "radial", "angular"), colors=None,
+                 labels=None, degrees=False, fig=None, axes=None):
     """Localization error vs time in trial (mean +- s.e.m. over trials), one panel per
-    kind of error, one line per estimate. ``fig`` / ``axes`` as for
-    :func:`ratemap_grid`; returns the figure."""
+    kind of error, one line per estimate.
+
+    Parameters
+    ----------
+    err : xarray.Dataset
+        Output of :func:`hippo_probe.localization_error`.
+    variables : sequence of str
+        Kinds of error, one panel each.
+    colors, labels : dict, optional
+        Colour and legend label of each estimate, by its name (e.g. ``"estimate_pf"``);
+        default matplotlib's cycle and the names.
+    degrees : bool
+        Angular error in degrees instead of radians.
+    fig, axes
+        As for :func:`ratemap_grid`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     variables = [v for v in variables if v in err]
     fig, axes = _panels(len(variables), max_cols=len(variables), panel=2.8, fig=fig,
                         axes=axes, what="kind of error")
+    colors, labels = colors or {}, labels or {}
     t = err["trial_time"].values
     for ax, name in zip(axes, variables):
         da = err[name]
+        scale = np.degrees(1.0) if degrees and da.attrs.get("units") == "rad" else 1.0
         if "estimate" in da.dims:
             lines = da.transpose("estimate", "trial_time")
         else:
             names = err.attrs.get("estimate", ["estimate"])
             lines = da.expand_dims(estimate=[names[0] if isinstance(names, list) else names])
         sem = err.get(f"{name}_sem")
-        for i, label in enumerate(lines["estimate"].values):
-            y = lines.values[i]
-            ax.plot(t, y, lw=1, label=str(label))
+        for i, estimate in enumerate(lines["estimate"].values):
+            y = lines.values[i] * scale
+            colour = colors.get(str(estimate), f"C{i % 10}")
+            ax.plot(t, y, lw=1.4, color=colour, label=labels.get(str(estimate), str(estimate)))
             if sem is not None:
-                e = sem.values[i] if "estimate" in sem.dims else sem.values
-                ax.fill_between(t, y - e, y + e, alpha=0.25, lw=0)
+                e = (sem.values[i] if "estimate" in sem.dims else sem.values) * scale
+                ax.fill_between(t, y - e, y + e, color=colour, alpha=0.15, lw=0)
         ax.set_xlabel(_label(err["trial_time"]))
-        ax.set_ylabel(_label(da))
-    if "estimate" in err.dims:
-        axes[0].legend(fontsize=7, frameon=False)
+        ax.set_ylabel(f"{da.attrs.get('long_name', name)} (deg)" if scale != 1.0
+                      else _label(da))
+        ax.set_xlim(t[0] if t[0] > t[-1] * 0.05 else 0, t[-1])
+        ax.set_ylim(bottom=0)
+    axes[0].legend(fontsize=7, frameon=False)
     return fig
 
 

@@ -25,19 +25,12 @@ def make(cfg, out):
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.6), constrained_layout=True)
     t = err.trial_time.values
     numbers = {"trial_time_s": t, "n_trials": int(rec.sizes["trial_id"])}
-    for ax, kind in zip(axes, ("euclidean", "radial", "angular")):
+    hp.plot.error_curves(err, colors=C.COLORS, labels=C.LABELS, degrees=True, axes=axes)
+    for kind in ("euclidean", "radial", "angular"):
         scale = np.degrees(1) if kind == "angular" else 1.0
         for name in ESTIMATES:
-            m = err[kind].sel(estimate=name).values * scale
-            s = err[f"{kind}_sem"].sel(estimate=name).values * scale
-            ax.plot(t, m, color=C.COLORS[name], label=C.LABELS[name], lw=1.4)
-            ax.fill_between(t, m - s, m + s, color=C.COLORS[name], alpha=0.15, lw=0)
-            numbers.setdefault(kind, {})[C.LABELS[name]] = m
-        ax.set_xlabel("time in trial (s)")
-        ax.set_ylabel(f"{err[kind].attrs['long_name']} "
-                      f"({'deg' if kind == 'angular' else err[kind].attrs['units']})")
-        ax.set_xlim(0, t[-1])
-        ax.set_ylim(bottom=0)
+            numbers.setdefault(kind, {})[C.LABELS[name]] = \
+                err[kind].sel(estimate=name).values * scale
     axes[0].legend(frameon=False, fontsize=8)
     fig.suptitle("Fig. 2 — localization in a familiar arena (mean radius 1 m, start "
                  "unknown), "

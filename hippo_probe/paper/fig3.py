@@ -20,19 +20,13 @@ from . import config as C
 
 
 def _curves(ax, err, names, numbers, key):
-    t = err.trial_time.values
-    numbers["trial_time_s"] = t
+    """Euclidean error of each estimate (mean +- s.e.m.) into ``ax``; the curves into
+    ``numbers[key]``."""
+    numbers["trial_time_s"] = err.trial_time.values
+    hp.plot.error_curves(err, variables=("euclidean",), colors=C.COLORS, labels=C.LABELS,
+                         axes=[ax])
     for name in names:
-        m = err.euclidean.sel(estimate=name).values
-        s = err.euclidean_sem.sel(estimate=name).values
-        ax.plot(t, m, color=C.COLORS[name], label=C.LABELS[name], lw=1.4)
-        ax.fill_between(t, m - s, m + s, color=C.COLORS[name], alpha=0.15, lw=0)
-        numbers.setdefault(key, {})[C.LABELS[name]] = m
-    ax.set_xlabel("time in trial (s)")
-    ax.set_ylabel("Euclidean error (m)")
-    ax.set_xlim(0, t[-1])
-    ax.set_ylim(bottom=0)
-    ax.legend(frameon=False, fontsize=7)
+        numbers.setdefault(key, {})[C.LABELS[name]] = err.euclidean.sel(estimate=name).values
 
 
 def _slam(cfg):
@@ -121,6 +115,10 @@ def make(cfg, out):
         a.legend(frameon=False, fontsize=7)
     # below the PF-SLAM curves' plateau, above the 100-particle line
     ax[4].legend(frameon=False, fontsize=7, loc="lower right", bbox_to_anchor=(1, 0.2))
+    # accuracy curves rise early and stay high: the middle right is below them and above
+    # chance and the retrained readout
+    for a in (ax[2], ax[5]):
+        a.legend(frameon=False, fontsize=7, loc="center right")
     ax[3].set_ylim(bottom=0)
     fig.suptitle(f"Fig. 3 — {gen.sizes['trial_id']} test trials per panel (A-C, F)")
     C.save(fig, "fig3", numbers, cfg, out)

@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from .._atomic import atomic_path
-from .._validators import check_positive
+from .._validators import check_option, check_positive
 from .._version import __version__
 from ..tasks import TaskConfig
 from ._common import resolve_start, resolve_task
@@ -67,8 +67,9 @@ METHODS = {"pi": "path integration", "sh": "single hypothesis", "nb": "naive Bay
 
 
 def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int | None = None,
-                  chunk: int = 100, threads: int | None = None, progress: bool = False,
-                  config: TaskConfig | None = None, baseline: BaselineConfig | None = None):
+                  methods=None, chunk: int = 100, threads: int | None = None,
+                  progress: bool = False, config: TaskConfig | None = None,
+                  baseline: BaselineConfig | None = None):
     """Run PI, SH, NB, the PF (and PF-SLAM on the specialized task) on ``batch``.
 
     Parameters
@@ -76,6 +77,10 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
     batch : TrialBatch
     n_particles, slam_particles : int, optional
         Defaults from :class:`~hippo_probe.baselines.config.ParticleFilterConfig`.
+    methods : sequence of str, optional
+        Which to run, among ``"pi"``, ``"sh"``, ``"nb"``, ``"pf"`` and (tasks that
+        classify) ``"pfslam"``; default all. The PF's covariance and drift come with
+        ``"pf"``, PF-SLAM's arena posterior and drift with ``"pfslam"``.
     chunk : int
         Trials per call of each method (bounds memory; results do not depend on it).
     threads : int, optional
@@ -114,19 +119,23 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
         slam_particles = pf_config.slam_particles
     n_particles = check_positive("n_particles", n_particles, integer=True)
     slam_particles = check_positive("slam_particles", slam_particles, integer=True)
-    slam = config.classify
+    offered = [m for m in METHODS if m != "pfslam" or config.classify]
+    methods = offered if methods is None else list(methods)
+    for m in methods:
+        check_option("methods", m, offered)
+    slam = "pfslam" in methods
     prior = target_prior(batch.task, seed=int(batch.seed), config=config,
-                         naive_bayes=baseline.naive_bayes)
-    runs = {
+                         naive_bayes=baseline.naive_bayes) if "nb" in methods else None
+    every = {
         "pi": lambda b: path_integration(b, config=config, baseline=baseline),
         "sh": lambda b: single_hypothesis(b, config=config, baseline=baseline),
         "nb": lambda b: naive_bayes(b, prior=prior, config=config, baseline=baseline),
         "pf": lambda b: particle_filter(b, n_particles, threads=threads, config=config,
                                         baseline=baseline),
+        "pfslam": lambda b: pf_slam(b, slam_particles, threads=threads, config=config,
+                                    baseline=baseline),
     }
-    if slam:
-        runs["pfslam"] = lambda b: pf_slam(b, slam_particles, threads=threads, config=config,
-                                           baseline=baseline)
+    runs = {name: every[name] for name in METHODS if name in methods}
     parts = {name: [] for name in runs}
     starts = range(0, len(batch), chunk)
     if progress:
@@ -152,17 +161,19 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
         data[f"estimate_{name}"] = (space_dims, trial_major(results, "estimate") + shift,
                                     {"units": "m", "long_name": f"{METHODS[name]} estimate"})
         attrs[f"attrs_{name}"] = json.dumps(_merge_attrs(results), default=float)
-    data["pf_cov"] = (("trial_id", "trial_time", "cov"), trial_major(parts["pf"], "cov"),
-                      {"units": "m^2", "long_name": "particle filter posterior covariance"})
     time_dims = ("trial_id", "trial_time")
     data["heading_drift"] = (time_dims, np.swapaxes(batch.heading_drift, 0, 1),
                              {"units": "rad", "long_name": "true heading drift"})
-    data["estimate_drift_pf"] = (time_dims, trial_major(parts["pf"], "drift_mean"),
-                             {"units": "rad", "long_name": "particle filter heading drift, "
-                                                           "posterior mean"})
-    data["pf_drift_sd"] = (time_dims, trial_major(parts["pf"], "drift_sd"),
-                           {"units": "rad", "long_name": "particle filter heading drift, "
-                                                         "posterior s.d."})
+    if "pf" in parts:
+        data["pf_cov"] = (("trial_id", "trial_time", "cov"), trial_major(parts["pf"], "cov"),
+                          {"units": "m^2",
+                           "long_name": "particle filter posterior covariance"})
+        data["estimate_drift_pf"] = (time_dims, trial_major(parts["pf"], "drift_mean"),
+                                     {"units": "rad", "long_name": "particle filter heading "
+                                                                   "drift, posterior mean"})
+        data["pf_drift_sd"] = (time_dims, trial_major(parts["pf"], "drift_sd"),
+                               {"units": "rad", "long_name": "particle filter heading "
+                                                             "drift, posterior s.d."})
     if "pfslam" in parts:
         data["estimate_drift_pfslam"] = (
             time_dims, trial_major(parts["pfslam"], "drift_mean"),
@@ -192,7 +203,9 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
         "seed": int(batch.seed), "dt": float(batch.dt), "frame": "arena",
         "world": config.world.name, "heading_drift": float(config.world.noise.heading_drift),
         "config_fingerprint": config.fingerprint(),
-        "n_particles": int(n_particles), "slam_particles": int(slam_particles) if slam else 0,
+        "methods": list(runs),
+        "n_particles": int(n_particles) if "pf" in parts else 0,
+        "slam_particles": int(slam_particles) if slam else 0,
         "created_by": f"hippo_probe {__version__}", **attrs})
 
 

@@ -181,24 +181,13 @@ def _digest(*parts) -> str:
 def baseline_estimates(batch, which, n_particles: int) -> dict:
     """Baselines' estimates in the ARENA frame (as recordings hold them), by name.
 
-    ``which`` among "pi", "sh", "nb", "pf". The PF also gives ``pf_cov``.
+    ``which`` among "pi", "sh", "nb", "pf"; the PF also gives ``pf_cov`` and its drift.
     """
-    from hippo_probe import baselines as bl
+    from hippo_probe.baselines.results import run_baselines
+    from hippo_probe.model.record import baselines_from_dataset
 
-    to_arena = (lambda e: e + batch.start[None]) \
-        if batch.config.target == "start_relative" else (lambda e: e)
-    out = {}
-    if "pi" in which:
-        out["estimate_pi"] = to_arena(bl.path_integration(batch).estimate)
-    if "sh" in which:
-        out["estimate_sh"] = to_arena(bl.single_hypothesis(batch).estimate)
-    if "nb" in which:
-        out["estimate_nb"] = to_arena(bl.naive_bayes(batch).estimate)
-    if "pf" in which:
-        res = bl.particle_filter(batch, n_particles=n_particles)
-        out["estimate_pf"] = to_arena(res.estimate)
-        out["pf_cov"] = res.cov
-    return out
+    return baselines_from_dataset(run_baselines(batch, n_particles=n_particles,
+                                                methods=which), batch)
 
 
 # ----------------------------------------------------------------------- recordings

@@ -30,15 +30,18 @@ def _curves(ax, err, names, numbers, key):
 
 
 def _slam(cfg):
+    """PF-SLAM's mean error (m) and accuracy vs time, at each of ``cfg.slam_particles``."""
+    from hippo_probe.baselines import localization_errors, run_baselines
+
     batch = make_trials("specialized", cfg.slam_trials, "test", cfg.seed, world=cfg.world)
 
     def run():
         out = {}
         for n in cfg.slam_particles:
-            res = hp.baselines.pf_slam(batch, n_particles=n)
-            err = np.linalg.norm(res.estimate - batch.target, axis=-1).mean(1)
-            acc = (res.class_probability.argmax(-1) == batch.environment[None]).mean(1)
-            out[f"error_{n}"], out[f"accuracy_{n}"] = err, acc
+            ds = run_baselines(batch, slam_particles=n, methods=["pfslam"])
+            out[f"error_{n}"] = localization_errors(ds).sel(baseline="pfslam").values
+            guess = ds.class_probability_pfslam.argmax("environment_id")
+            out[f"accuracy_{n}"] = (guess == ds.trial_environment).mean("trial_id").values
         return out
     return C.cached_arrays("pf_slam", cfg, run, cfg.slam_trials, cfg.slam_particles)
 

@@ -86,3 +86,17 @@ def test_cli(tmp_path, capsys):
     assert "--overwrite" in capsys.readouterr().err
     assert main(["baselines", "--task", "maze", "--out", str(out)]) == 2
     assert "`task` must be one of" in capsys.readouterr().err
+
+
+def test_a_subset_of_methods_gives_the_same_numbers(generalized):
+    batch, ds = generalized
+    part = run_baselines(batch, n_particles=100, chunk=2, baseline=SMALL,
+                         methods=["pf", "pi"])
+    assert part.attrs["methods"] == ["pi", "pf"]
+    assert "estimate_sh" not in part and "estimate_nb" not in part
+    for name in ("estimate_pi", "estimate_pf", "pf_cov", "estimate_drift_pf"):
+        assert np.array_equal(part[name].values, ds[name].values), name
+    only_pi = run_baselines(batch, methods=["pi"])
+    assert "pf_cov" not in only_pi and only_pi.attrs["n_particles"] == 0
+    with pytest.raises(ValueError, match="`methods`.*pfslam"):
+        run_baselines(batch, methods=["pfslam"])         # no classes in this task

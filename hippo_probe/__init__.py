@@ -46,6 +46,7 @@ _LAZY_ATTRS = {
     "remapping_similarity": "hippo_probe.analysis",
     "context_cells": "hippo_probe.analysis",
     "decode_covariance": "hippo_probe.analysis",
+    "decode_environment": "hippo_probe.analysis",
     "correlation_dimension": "hippo_probe.analysis",
     "intrinsic_dimension": "hippo_probe.analysis",
     "localization_error": "hippo_probe.analysis",

@@ -201,11 +201,11 @@ def test_network_vs_rodent(tmp_path):
 def test_arena_probe(tmp_path):
     run = subprocess.run([sys.executable, str(ROOT / "analyses" / "arena_probe.py"),
                           "--train-trials", "40", "--test-trials", "10", "--networks",
-                          "specialized", "--out", str(tmp_path)], capture_output=True,
+                          "specialized_compass", "--out", str(tmp_path)], capture_output=True,
                          text=True, cwd=ROOT, timeout=900)
     assert run.returncode == 0, run.stderr[-3000:]
     res = json.loads((tmp_path / "arena_probe.json").read_text())["results"]
-    cells = [cell for by_c in res["specialized"].values() for cell in by_c.values()]
+    cells = [cell for by_c in res["specialized_compass"].values() for cell in by_c.values()]
     assert len(cells) == 9 and all(0 <= c["test"] <= 1 for c in cells)
     # the positive control: a probe of the specialized network separates the training
     # trials' arenas far above chance (0.01)

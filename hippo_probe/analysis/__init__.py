@@ -12,6 +12,7 @@ from .classification_accuracy import classification_accuracy
 from .context_cells import context_cells
 from .correlation_dimension import correlation_dimension
 from .decode_covariance import decode_covariance
+from .decode_environment import decode_environment
 from .head_direction_tuning import head_direction_tuning
 from .intrinsic_dimension import intrinsic_dimension
 from .localization_error import localization_error
@@ -35,6 +36,7 @@ __all__ = [
     "context_cells",
     "correlation_dimension",
     "decode_covariance",
+    "decode_environment",
     "head_direction_tuning",
     "intrinsic_dimension",
     "localization_error",

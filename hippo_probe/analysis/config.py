@@ -190,6 +190,35 @@ class DecodingConfig:
 
 
 @dataclass(frozen=True)
+class EnvironmentDecodingConfig:
+    """Defaults of :func:`decode_environment`.
+
+    Attributes
+    ----------
+    times : tuple of float
+        Decoded at 50, 100 and 200 s into the trial: the times at which the study reads
+        its classification curves (Fig. 3C, 3F).
+    c : float
+        Inverse L2 strength of the logistic regression on standardized units
+        (scikit-learn's ``C``); 1, the middle of the range that gave the same test
+        accuracies on the networks (0.01-100, ``analyses/arena_probe.py``).
+    window : int
+        Training samples at each time: the step and its 2 neighbours on each side (5
+        samples per trial), so a fit at one moment sees 5x the trials' worth of data.
+    n_folds : int
+        5 folds by trial when no separate test recording is given.
+    max_iter : int
+        Iterations of the solver (lbfgs): 1,000, enough to converge on 256 units.
+    """
+
+    times: tuple = (50.0, 100.0, 200.0)
+    c: float = 1.0
+    window: int = 2
+    n_folds: int = 5
+    max_iter: int = 1000
+
+
+@dataclass(frozen=True)
 class CorrelationDimensionConfig:
     """Defaults of :func:`correlation_dimension`.
 
@@ -528,6 +557,7 @@ STABILITY = StabilityConfig()
 REMAPPING = RemappingConfig()
 DECODING = DecodingConfig()
 CORRELATION_DIMENSION = CorrelationDimensionConfig()
+ENVIRONMENT_DECODING = EnvironmentDecodingConfig()
 INTRINSIC_DIMENSION = IntrinsicDimensionConfig()
 PLACE_FIELD = PlaceFieldConfig()
 GRID = GridConfig()

@@ -1,0 +1,175 @@
+"""Decode the environment (arena) from the population at given times in the trial: a
+linear probe of whether the context is linearly present in the units."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from .._validators import check_number
+from . import _common
+from .config import ENVIRONMENT_DECODING as CFG
+
+
+def _samples(rec, t, half_width):
+    """Indices of each trial's samples within ``half_width`` (s) of time ``t`` in trial."""
+    tt = _common.values(rec["trial_time"]).astype(float)
+    return np.flatnonzero(np.abs(tt - t) <= half_width)
+
+
+def _fit(x, y, c, max_iter):
+    from sklearn.linear_model import LogisticRegression
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+
+    return make_pipeline(StandardScaler(), LogisticRegression(C=c, max_iter=max_iter)).fit(
+        x, y)
+
+
+def _accuracy(model, x, y) -> float:
+    return float(np.mean(model.predict(x) == y)) if len(y) else np.nan
+
+
+def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_folds=None):
+    """Accuracy of a linear decoder of the environment from the activity, by time in trial.
+
+    At each time ``t`` a multinomial logistic regression (scikit-learn, units standardized
+    on the training samples, L2 strength ``1 / c``) maps the population vector to the
+    environment: trained on each trial's samples within ``window`` steps of ``t``, scored
+    on each held-out trial's sample nearest ``t``::
+
+        acc(t) = < [argmax_e p(e | x_j(t)) = e_j] >_j   over held-out trials j
+
+    Held out means another recording (``test``: e.g. trials of the test split, the
+    decoder trained on the training split's) or, without one, ``n_folds`` folds by trial
+    (a trial is never scored by a decoder that saw it). It asks of any recording what
+    readout retraining (the study's Fig. 3F) asks of a network, with a convex fit run to
+    convergence instead of gradient steps.
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        A recording with ``activity``, ``environment``, ``trial`` and ``trial_time``.
+    test : xarray.Dataset, optional
+        A recording to score on (same units); default: cross-validation within ``rec``.
+    times : sequence of float, optional
+        Times in trial (s); default 50, 100, 200 s.
+    c : float, optional
+        Inverse L2 strength (default 1).
+    window : int, optional
+        Training samples per trial at each time: ``t`` and ``window`` steps on each side
+        (default 2).
+    n_folds : int, optional
+        Folds by trial when ``test`` is None (default 5).
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``trial_time`` (the ``times``): ``accuracy`` (held-out trials),
+        ``train_accuracy`` (the training trials' own samples at ``t``: far above
+        ``accuracy`` means the decoder memorizes trials) and ``n_scored`` (held-out
+        trials scored); attrs ``chance`` (1 / environments) and the parameters.
+
+    References
+    ----------
+    Kanitscheider & Fiete (2017), NIPS 30 (Fig. 3F: readout retraining). Hastie,
+    Tibshirani & Friedman (2009), The Elements of Statistical Learning, 2nd ed., Sect. 4.4
+    (multinomial logistic regression) and 7.10 (cross-validation).
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> rng = np.random.default_rng(0)
+    >>> env = np.repeat([0, 1], 200)                       # 20 trials of 20 samples
+    >>> act = rng.normal(size=(400, 5)) + env[:, None]     # the environment shifts units
+    >>> rec = xr.Dataset(
+    ...     {"activity": (("time", "unit"), act)},
+    ...     coords={"time": np.arange(400.0), "unit": np.arange(5),
+    ...             "trial": ("time", np.repeat(np.arange(20), 20)),
+    ...             "trial_time": ("time", np.tile(np.arange(1.0, 21.0), 20)),
+    ...             "environment": ("time", env)}, attrs={"dt": 1.0})
+    >>> res = decode_environment(rec, times=[10.0])
+    >>> res.accuracy.item() > 0.8
+    True
+    """
+    need = ["activity", "environment", "trial", "trial_time"]
+    _common.check_recording(rec, need, why="environment decoding")
+    if test is not None:
+        _common.check_recording(test, need, why="environment decoding", name="test")
+        if test.sizes["unit"] != rec.sizes["unit"]:
+            raise ValueError(f"`test` must have the units of `rec` ({rec.sizes['unit']}); "
+                             f"got {test.sizes['unit']}")
+    times = [check_number("times", float(t), low=0) for t in
+             (CFG.times if times is None else np.atleast_1d(times))]
+    c = check_number("c", CFG.c if c is None else c, low=0)
+    window = check_number("window", CFG.window if window is None else window, low=0,
+                          low_inclusive=True, integer=True)
+    n_folds = check_number("n_folds", CFG.n_folds if n_folds is None else n_folds, low=2,
+                           low_inclusive=True, integer=True)
+    dt = _common.sample_dt(rec)
+    act = _common.activity(rec)
+    env = _common.values(rec["environment"])
+    trial = _common.values(rec["trial"])
+    trial_ids = np.unique(trial)
+    n_trials = len(trial_ids)
+    if test is None and n_trials < n_folds:
+        raise ValueError(f"cross-validation by trial needs at least `n_folds` = {n_folds} "
+                         f"trials; `rec` has {n_trials}")
+    acc, train_acc, scored = [], [], []
+    for t in times:
+        fit_idx = _samples(rec, t, (window + 0.5) * dt)
+        at_idx = _samples(rec, t, 0.5 * dt)
+        if not len(at_idx) or len(np.unique(env[fit_idx])) < 2:
+            acc.append(np.nan)
+            train_acc.append(np.nan)
+            scored.append(0)
+            continue
+        x_fit = np.asarray(act.isel(time=fit_idx).values, np.float64)
+        x_at = np.asarray(act.isel(time=at_idx).values, np.float64)
+        if test is not None:
+            model = _fit(x_fit, env[fit_idx], c, CFG.max_iter)
+            test_idx = _samples(test, t, 0.5 * _common.sample_dt(test))
+            y_test = _common.values(test["environment"])[test_idx]
+            x_test = np.asarray(_common.activity(test).isel(time=test_idx).values,
+                                np.float64)
+            acc.append(_accuracy(model, x_test, y_test))
+            train_acc.append(_accuracy(model, x_at, env[at_idx]))
+            scored.append(len(test_idx))
+            continue
+        from sklearn.model_selection import KFold
+
+        hits, n, train_hits, train_n = 0, 0, 0, 0
+        # folds of whole trials, shuffled: trials are often stored by environment
+        folds = KFold(n_splits=n_folds, shuffle=True, random_state=0)
+        for _, held_trials in folds.split(trial_ids):
+            held = np.isin(trial, trial_ids[held_trials])
+            fit_mask = ~held[fit_idx]
+            at_held = held[at_idx]
+            if len(np.unique(env[fit_idx][fit_mask])) < 2:
+                continue
+            model = _fit(x_fit[fit_mask], env[fit_idx][fit_mask], c, CFG.max_iter)
+            hits += int(np.sum(model.predict(x_at[at_held]) == env[at_idx][at_held]))
+            n += int(at_held.sum())
+            train_hits += int(np.sum(model.predict(x_at[~at_held]) == env[at_idx][~at_held]))
+            train_n += int((~at_held).sum())
+        acc.append(hits / n if n else np.nan)
+        train_acc.append(train_hits / train_n if train_n else np.nan)
+        scored.append(n)
+    n_env = len(np.unique(env))
+    coords = {"trial_time": ("trial_time", np.asarray(times),
+                             {"units": "s", "long_name": "time in trial"})}
+    out = xr.Dataset({
+        "accuracy": ("trial_time", np.asarray(acc, float),
+                     {"units": "1", "long_name": "decoding accuracy, held-out trials"}),
+        "train_accuracy": ("trial_time", np.asarray(train_acc, float),
+                           {"units": "1", "long_name": "decoding accuracy, training trials"}),
+        "n_scored": ("trial_time", np.asarray(scored, np.int64),
+                     {"units": "1", "long_name": "held-out trials scored"}),
+    }, coords=coords)
+    out.attrs = _common.provenance(
+        "decode_environment", rec, c=c, window=window, chance=1.0 / n_env,
+        n_environments=n_env,
+        validation=("separate test recording" if test is not None
+                    else f"{n_folds}-fold by trial"),
+        model="multinomial logistic regression on standardized units (scikit-learn)")
+    return out

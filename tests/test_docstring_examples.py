@@ -1,0 +1,30 @@
+"""The Examples sections of the public docstrings run and show what they say."""
+
+import doctest
+import importlib
+import pkgutil
+
+import pytest
+
+import hippo_probe
+
+# the packages whose examples are quick (the rest make trials or load networks and are
+# exercised by their own tests)
+PACKAGES = ("hippo_probe.analysis", "hippo_probe.recording")
+MODULES = sorted(
+    info.name for package in PACKAGES
+    for info in pkgutil.iter_modules(importlib.import_module(package).__path__,
+                                     package + ".")
+    if not info.name.rsplit(".", 1)[-1].startswith("__"))
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_examples(name):
+    module = importlib.import_module(name)
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert result.failed == 0, f"{result.failed} of {result.attempted} examples failed"
+
+
+def test_the_modules_are_found():
+    assert "hippo_probe.analysis.decode_environment" in MODULES
+    assert hippo_probe.__version__

@@ -14,6 +14,7 @@ two Kolmogorov-Smirnov p-values:
   small: the effective sample is smaller than the count. Shown for comparison.
 
     python analyses/pf_calibration.py [--trials 200] [--worlds darkness compass]
+        [--tasks localization ...] [--particles N]
 """
 
 import argparse
@@ -31,15 +32,18 @@ def main():
     ap.add_argument("--trials", type=int, default=200)
     ap.add_argument("--worlds", nargs="+", default=["darkness", "compass"])
     ap.add_argument("--tasks", nargs="+", default=list(TASKS))
+    ap.add_argument("--particles", type=int, default=None,
+                    help="particles of the filter (default: the filter's default)")
     a = ap.parse_args()
     keep = np.arange(25, 500, 50)                      # every 20 s from 10 s
-    print(f"{a.trials} validation trials per task, ranks at {len(keep)} steps 20 s apart\n")
+    print(f"{a.trials} validation trials per task, ranks at {len(keep)} steps 20 s apart, "
+          f"{a.particles or 'default'} particles\n")
     print(f"{'world':<10}{'task':<14}{'rank':<13}{'KS p, per time':>15}{'pooled':>8}"
           f"{'in 90%':>8}   deciles")
     for world in a.worlds:
         for task in a.tasks:
             batch = make_trials(task, a.trials, "validation", 0, world=world)
-            res = particle_filter(batch, keep=keep)
+            res = particle_filter(batch, a.particles, keep=keep)
             for name, rank in posterior_ranks(res, batch).items():
                 if name == "drift" and world == "compass":
                     continue

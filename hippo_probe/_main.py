@@ -117,9 +117,10 @@ def _figures(args, *, extra_tracked=()):
             raise
         notes = None
         print(f"(no {NOTES}: RESULTS.md without the notes; run from a clone for them)")
-    print(f"wrote {write_results(out, out / 'RESULTS.md', notes)}")
+    made = [cfg.run for cfg in cfgs]       # not folders an earlier run left in --out
+    print(f"wrote {write_results(out, out / 'RESULTS.md', notes, runs=made)}")
     from .paper import ablation
-    shown.append(ablation.make(out, out))
+    shown.append(ablation.make(out, out, runs=made))
     from .paper import rodent
     try:
         session = config.repository_file(rodent.SESSION, argument="session")

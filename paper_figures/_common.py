@@ -12,7 +12,7 @@ from pathlib import Path
 
 # the old home of these names
 from hippo_probe.paper.config import *
-from hippo_probe.paper.config import CONFIGS, WORLDS, for_run, with_cache
+from hippo_probe.paper.config import CONFIGS, WORLDS, for_run, shipped_runs, with_cache
 
 ROOT = Path(__file__).resolve().parents[1]
 CACHE = ROOT / "recordings"
@@ -25,8 +25,10 @@ def parse_args(description: str):
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--size", choices=sorted(CONFIGS), default="full",
                     help="data size (default full: minutes on 2 cores)")
-    ap.add_argument("--world", choices=WORLDS, default=WORLDS[0],
-                    help="world of the networks and their trials")
+    first = (shipped_runs() or [(WORLDS[0], 0)])[0]
+    ap.add_argument("--world", choices=WORLDS, default=first[0],
+                    help="world of the networks and their trials (default: the first "
+                         "world with shipped networks, the darkness world once shipped)")
     ap.add_argument("--seed", type=int, default=0, help="training seed of the networks")
     ap.add_argument("--out", default=str(ROOT / "figures"), help="output folder")
     a = ap.parse_args()

@@ -18,8 +18,17 @@ MODULES = sorted(
     if not info.name.rsplit(".", 1)[-1].startswith("__"))
 
 
+#: modules whose examples need an optional dependency (an extra), skipped without it
+NEEDS = {"hippo_probe.analysis.intrinsic_dimension": "skdim",
+         "hippo_probe.analysis.decode_environment": "sklearn",
+         "hippo_probe.recording.nwb": "pynwb",
+         "hippo_probe.recording.pynapple_bridge": "pynapple"}
+
+
 @pytest.mark.parametrize("name", MODULES)
 def test_examples(name):
+    if name in NEEDS:
+        pytest.importorskip(NEEDS[name])
     module = importlib.import_module(name)
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     assert result.failed == 0, f"{result.failed} of {result.attempted} examples failed"

@@ -68,7 +68,8 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
         Over ``trial_time`` (the ``times``): ``accuracy`` (held-out trials),
         ``train_accuracy`` (the training trials' own samples at ``t``: far above
         ``accuracy`` means the decoder memorizes trials) and ``n_scored`` (held-out
-        trials scored); attrs ``chance`` (1 / environments) and the parameters.
+        samples scored: one per trial where ``t`` falls on a sample, two where it falls
+        midway between two); attrs ``chance`` (1 / environments) and the parameters.
 
     References
     ----------
@@ -164,7 +165,7 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
         "train_accuracy": ("trial_time", np.asarray(train_acc, float),
                            {"units": "1", "long_name": "decoding accuracy, training trials"}),
         "n_scored": ("trial_time", np.asarray(scored, np.int64),
-                     {"units": "1", "long_name": "held-out trials scored"}),
+                     {"units": "1", "long_name": "held-out samples scored"}),
     }, coords=coords)
     out.attrs = _common.provenance(
         "decode_environment", rec, c=c, window=window, chance=1.0 / n_env,

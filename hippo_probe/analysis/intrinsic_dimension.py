@@ -20,17 +20,18 @@ ESTIMATORS = {
 
 def _neighbours(points, order, trial, k, theiler):
     """Distances and indices of each point's ``k`` nearest neighbours, skipping those of
-    the same trial within ``theiler`` samples of it (and exact duplicates); and which
+    the same trial fewer than ``theiler`` samples from it (and exact duplicates); and which
     points have ``k`` such neighbours (the rows returned)."""
     from sklearn.neighbors import NearestNeighbors
 
-    # at most 2 * theiler sampled points can fall within the window, plus the point itself
+    # fewer than 2 * theiler sampled points fall within the window, plus the point itself
     extra = k + 2 * theiler + 1
     extra = min(extra, len(points) - 1)
     dist, idx = NearestNeighbors(n_neighbors=extra + 1, algorithm="brute").fit(
         points).kneighbors(points)
+    # the window of C(r)'s pair counts: same trial and |i - j| < theiler samples apart
     near_in_time = (trial[idx] == trial[:, None]) & \
-        (np.abs(order[idx] - order[:, None]) <= theiler)
+        (np.abs(order[idx] - order[:, None]) < theiler)
     ok = ~near_in_time & (dist > 0)
     # the first k allowed neighbours of each point, in order of distance
     rank = np.cumsum(ok, axis=1)

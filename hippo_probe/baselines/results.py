@@ -120,7 +120,10 @@ def run_baselines(batch, *, n_particles: int | None = None, slam_particles: int 
     n_particles = check_positive("n_particles", n_particles, integer=True)
     slam_particles = check_positive("slam_particles", slam_particles, integer=True)
     offered = [m for m in METHODS if m != "pfslam" or config.classify]
-    methods = offered if methods is None else list(methods)
+    methods = offered if methods is None else \
+        [methods] if isinstance(methods, str) else list(methods)
+    if not methods:
+        raise ValueError(f"`methods` must name at least one of {offered}; got none")
     for m in methods:
         check_option("methods", m, offered)
     slam = "pfslam" in methods

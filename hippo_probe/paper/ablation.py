@@ -27,10 +27,11 @@ from .results import read_runs, rows
 WORLD_COLORS = {"darkness": "k", "compass": "tab:orange"}
 
 
-def make(figures_dir, out) -> Path:
+def make(figures_dir, out, runs=None) -> Path:
     """Draw ``<out>/ablation.png/.pdf`` and ``ablation.json`` from the runs under
-    ``figures_dir`` (``<world>-seed<k>/fig*.json``); returns the PNG's path."""
-    runs = read_runs(figures_dir)
+    ``figures_dir`` (``<world>-seed<k>/fig*.json``; only the folders ``runs`` if given);
+    returns the PNG's path."""
+    runs = read_runs(figures_dir, runs)
     claims = list(rows({}))
     per_world = {w: [list(rows(figs)) for figs in by_seed.values()]
                  for w, by_seed in runs.items()}

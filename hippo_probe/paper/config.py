@@ -2,8 +2,9 @@
 
 Every figure reads recordings of the shipped networks (``hippo_probe/pretrained``) with
 the baselines' estimates added, made once and cached under the configuration's cache
-folder (:attr:`FigureConfig.cache`: ``<cache_root>/paper-<size>/``; ``hippo-probe
-figures`` puts it under its ``--out`` unless given ``--cache``). A cached recording is
+folder (:attr:`FigureConfig.cache`: ``<cache_root>/paper-<size>/<world>-seed<k>/``;
+``hippo-probe figures`` puts it under its ``--out`` unless given ``--cache``). A cached
+recording is
 reused only if it was made from the same network file and the same configuration (both
 hashed into its attrs); otherwise it is rebuilt.
 
@@ -41,7 +42,8 @@ class FigureConfig:
     (tests) runs every code path on a handful of trials; ``paper`` is the study's scale
     (1,000 test trials, PF-SLAM up to 10,000 particles), for the documented rebuild.
 
-    ``cache_root`` is where the cached recordings go (``<cache_root>/paper-<name>/``);
+    ``cache_root`` is where the cached recordings go
+    (``<cache_root>/paper-<name>/<world>-seed<k>/``);
     it is not part of the figures' numbers (not in their JSON, not in cache keys). Give
     it with :func:`with_cache`.
     """
@@ -102,7 +104,8 @@ CONFIGS = {
 
 
 def with_cache(cfg: FigureConfig, folder) -> FigureConfig:
-    """``cfg`` with its cached recordings under ``folder`` (``folder/paper-<size>/``)."""
+    """``cfg`` with its cached recordings under ``folder``
+    (``folder/paper-<size>/<world>-seed<k>/``)."""
     return replace(cfg, cache_root=str(folder))
 
 

@@ -1,7 +1,7 @@
 """RESULTS.md: each quantitative claim of the study beside our value.
 
-Reads the JSON files the figure builders wrote (``<figures>/fig*.json``) and appends the
-hand-written notes (``paper_figures/RESULTS_notes.md`` of the repository by default).
+Reads the JSON files the figure builders wrote for every run
+(``<figures>/<world>-seed<k>/fig*.json``) and appends the hand-written notes (``paper_figures/RESULTS_notes.md`` of the repository by default).
 :func:`write_results` is called by ``hippo-probe figures`` and by the script
 ``paper_figures/results.py``.
 """
@@ -267,13 +267,20 @@ def error_table(fig):
 _RUN = re.compile(r"(?P<world>[a-z]+)-seed(?P<seed>\d+)")
 
 
-def read_runs(figures_dir) -> dict:
-    """The figures' JSON of every run under ``figures_dir``: ``{world: {seed: {figN:
-    data}}}``, worlds in the order of :data:`~hippo_probe.paper.config.WORLDS`."""
+def read_runs(figures_dir, runs=None) -> dict:
+    """The figures' JSON of the runs under ``figures_dir``: ``{world: {seed: {figN:
+    data}}}``, worlds in the order of :data:`~hippo_probe.paper.config.WORLDS`.
+
+    ``runs`` (folder names, ``<world>-seed<k>``) limits it to those: the runs just made,
+    not a folder an earlier run of another size or seed left there. Default: every run
+    folder found.
+    """
     from .config import WORLDS
 
     found = {}
     for folder in sorted(Path(figures_dir).iterdir()) if Path(figures_dir).is_dir() else ():
+        if runs is not None and folder.name not in runs:
+            continue
         m = _RUN.fullmatch(folder.name)
         figs = {p.stem: json.loads(p.read_text()) for p in sorted(folder.glob("fig*.json"))}
         if m and folder.is_dir() and figs:
@@ -315,6 +322,16 @@ def _spread(values: list) -> str:
         f"{mean:.2f} ({min(values):.2f}–{max(values):.2f})"
 
 
+def _stopped(stopped) -> str:
+    """How a run that ended before its budget ended, in words (``log["stopped"]``)."""
+    if not stopped:
+        return ""
+    rule = str(stopped.get("reason", "")).split(":")[0]
+    return {"stop_improvement": " (ended early: validation improved < 1% over its last "
+                                "fifth)",
+            "max_hours": " (ended early: the 10-hour cap)"}.get(rule, " (ended early)")
+
+
 def _word(verdict: str) -> str:
     return verdict.split(" (")[0]
 
@@ -338,7 +355,7 @@ def world_columns(by_seed: dict) -> list[dict]:
     return out
 
 
-def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES) -> Path:
+def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES, *, runs=None) -> Path:
     """Write RESULTS.md: the study's claims beside the numbers of the figures' JSON.
 
     One column per world (the darkness world, the study's, first): each claim's headline
@@ -357,6 +374,8 @@ def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES) -> Path:
     notes_path : str or os.PathLike or None, optional
         Hand-written explanations appended to the table; default the repository's
         ``paper_figures/RESULTS_notes.md``; ``None``: no notes.
+    runs : sequence of str, optional
+        The run folders to read (default: every ``<world>-seed<k>`` found).
 
     Returns
     -------
@@ -380,7 +399,7 @@ def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES) -> Path:
         notes_path = Path(notes_path)
         if not notes_path.is_file():
             raise FileNotFoundError(f"notes {notes_path} not found")
-    runs = read_runs(figures_dir)
+    runs = read_runs(figures_dir, runs)
     worlds = list(dict.fromkeys([*WORLDS, *runs]))
     columns = {w: world_columns(runs[w]) if w in runs else None for w in worlds}
     any_figs = next((f for by_seed in runs.values() for f in by_seed.values()), {})
@@ -398,7 +417,7 @@ def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES) -> Path:
             lines.append(f"- {w} world, seed {seed}: " + ("; ".join(
                 f"{k} {v['steps_done']} of {v['steps_budget']} steps"
                 + ("" if v.get("finished") else " (training not finished)")
-                for k, v in nets.items()) or "networks n/a"))
+                + _stopped(v.get("stopped")) for k, v in nets.items()) or "networks n/a"))
     head = ["claim (Kanitscheider & Fiete 2017)", "paper"]
     for w in worlds:
         head += [f"{w} world: mean (min–max) over seeds", f"verdict, {w}"]

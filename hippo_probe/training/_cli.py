@@ -51,7 +51,7 @@ def add_commands(sub):
                         "this fraction over the last fifth of the steps done (0 = never)")
     p.add_argument("--max-hours", type=float, default=d.max_hours, metavar="H",
                    help="stop before --steps once the run's wall time, summed over resumes, "
-                        "passes H hours (0 = no cap)")
+                        "passes H hours (default: no cap but the step budget)")
     p.add_argument("--seed", type=int, default=d.seed,
                    help="seed of the task's splits (which trials exist)")
     p.add_argument("--init-seed", type=int, default=d.init_seed,

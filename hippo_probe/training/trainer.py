@@ -334,6 +334,10 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
         step, best_loss, best_state = ckpt["step"], ckpt["best_loss"], ckpt["best_model"]
         log = ckpt["log"]
         log.setdefault("resumed_at", []).append(step)
+        # a run resumed after it ended (by a stopping rule) is tested and stopped anew;
+        # the old verdict and test results must not outlive the training they describe
+        for key in ("stopped", "test", "test_curves", "best_validation_loss"):
+            log.pop(key, None)
     segments = log.setdefault("precision_from_step",
                               [[0, log["config"].get("precision", "fp32")]])
     if segments[-1][1] != config.precision:
@@ -377,14 +381,17 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
     done_here = 0
     try:
         while step < config.steps:
-            if step % config.validate_every == 0 and (not log["validation"] or
-                                                      log["validation"][-1]["step"] != step):
-                if rank == 0:
+            if step % config.validate_every == 0:
+                if rank == 0 and (not log["validation"] or
+                                  log["validation"][-1]["step"] != step):
                     last_val = validate()
+                # checked even when the step was validated before a resume: a stopped run
+                # resumed with the same rules stops again here, without training on
                 reason = stop_reason(config, log["validation"], step,
                                      wall0 + time.time() - t_start)
                 if world_size > 1:         # every rank stops at the same step
-                    flag = torch.tensor([reason is not None], dtype=torch.int32)
+                    flag = torch.tensor([reason is not None], dtype=torch.int32,
+                                        device=device)
                     torch.distributed.broadcast(flag, 0)
                     if rank != 0:
                         reason = "the stopping rule on rank 0" if flag.item() else None

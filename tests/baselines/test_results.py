@@ -100,3 +100,10 @@ def test_a_subset_of_methods_gives_the_same_numbers(generalized):
     assert "pf_cov" not in only_pi and only_pi.attrs["n_particles"] == 0
     with pytest.raises(ValueError, match="`methods`.*pfslam"):
         run_baselines(batch, methods=["pfslam"])         # no classes in this task
+
+
+def test_methods_as_one_name_or_none_at_all(generalized):
+    batch, _ = generalized
+    assert run_baselines(batch, methods="pi").attrs["methods"] == ["pi"]
+    with pytest.raises(ValueError, match="at least one"):
+        run_baselines(batch, methods=[])

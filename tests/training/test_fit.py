@@ -353,3 +353,15 @@ def test_the_stopping_rule_may_change_on_resume():
     assert a.differences(b) == {}
     with pytest.raises(ValueError, match="stop_improvement"):
         TrainConfig(**{**TINY, "stop_improvement": 2.0})
+
+
+def test_a_stopped_run_resumed_stops_again_or_trains_on_without_its_old_verdict(tmp_path):
+    run, cache = tmp_path / "run", tmp_path / "cache"
+    capped = TrainConfig(**{**TINY, "max_hours": 1e-9})
+    fit(capped, run, cache_dir=cache, progress=False)
+    # the same rules: it stops where it stood, without training a step more
+    again = fit(capped, run, cache_dir=cache, progress=False)
+    assert again["stopped"]["step"] == 0 and len(again["train"]) == 0
+    # the cap lifted: it trains to its budget and no longer says it stopped
+    done = fit(TrainConfig(**TINY), run, cache_dir=cache, progress=False)
+    assert "stopped" not in done and len(done["train"]) == 6 and "test" in done

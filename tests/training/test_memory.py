@@ -1,4 +1,5 @@
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -33,8 +34,8 @@ STEP_FAULTS = textwrap.dedent("""
 
 def step_faults(mode):
     out = subprocess.run([sys.executable, "-c", STEP_FAULTS, mode], check=True,
-                         capture_output=True, text=True, env={"OMP_NUM_THREADS": "1",
-                                                             "PATH": ""})
+                         capture_output=True, text=True,
+                         env={**os.environ, "OMP_NUM_THREADS": "1"})
     return json.loads(out.stdout.splitlines()[-1])
 
 

@@ -172,8 +172,8 @@ def make(cfg, out):
     ax.set_ylabel("cumulative fraction of trial pairs")
     ax.set_title("D remapping (specialized network); centred: each unit's mean removed",
                  fontsize=9)
-    # below the different-arena curves and left of the same-arena ones: off the data
-    ax.legend(frameon=False, fontsize=7, loc="lower center", bbox_to_anchor=(0.42, 0.02))
+    # the top left is empty: the different-arena curves reach it only right of x = 0.3
+    ax.legend(frameon=False, fontsize=6.5, loc="upper left")
 
     ctx = hp.context_cells(many)
     ax, scatter = bottom[1].subplots(1, 2)

@@ -100,6 +100,20 @@ def scaling_fit(log_r, log_c, c_range, min_decades):
     return slope[k], intercept, idx[a[k]], idx[b[k]]
 
 
+def sampling_options(cfg, is_rec, max_points, theiler, transient):
+    """``(max_points, theiler, transient)`` checked, defaults from ``cfg`` (a config with
+    those fields; arrays default to no transient): the state sampling shared with
+    :func:`~hippo_probe.analysis.intrinsic_dimension`."""
+    max_points = check_number("max_points", cfg.max_points if max_points is None
+                              else max_points, low=10, low_inclusive=True, integer=True)
+    theiler = check_number("theiler", cfg.theiler if theiler is None else theiler, low=0,
+                           low_inclusive=True, integer=True)
+    transient = check_number("transient", (cfg.transient if is_rec else 0.0)
+                             if transient is None else transient, low=0, low_inclusive=True,
+                             high=1, high_inclusive=False)
+    return max_points, theiler, transient
+
+
 def correlation_dimension(rec_or_array, *, max_points=None, theiler=None, transient=None,
                           c_range=None, min_decades=None, seed=None):
     """Correlation dimension of the activity's trajectory (Grassberger-Procaccia).
@@ -154,13 +168,8 @@ def correlation_dimension(rec_or_array, *, max_points=None, theiler=None, transi
     True
     """
     is_rec = isinstance(rec_or_array, xr.Dataset)
-    max_points = check_number("max_points", CFG.max_points if max_points is None
-                              else max_points, low=10, low_inclusive=True, integer=True)
-    theiler = check_number("theiler", CFG.theiler if theiler is None else theiler, low=0,
-                           low_inclusive=True, integer=True)
-    transient = check_number("transient", (CFG.transient if is_rec else 0.0)
-                             if transient is None else transient, low=0, low_inclusive=True,
-                             high=1, high_inclusive=False)
+    max_points, theiler, transient = sampling_options(CFG, is_rec, max_points, theiler,
+                                                      transient)
     c_range = CFG.c_range if c_range is None else tuple(c_range)
     if not (len(c_range) == 2 and 0 < c_range[0] < c_range[1] <= 1):
         raise ValueError(f"`c_range` must be (low, high) with 0 < low < high <= 1; got "

@@ -9,7 +9,7 @@ import xarray as xr
 from .._validators import check_number, check_option
 from . import _common
 from .config import INTRINSIC_DIMENSION as CFG
-from .correlation_dimension import _points
+from .correlation_dimension import _points, sampling_options
 
 #: The estimators offered, by scikit-dimension's class name, with their papers.
 ESTIMATORS = {
@@ -115,13 +115,8 @@ def intrinsic_dimension(rec_or_array, *, estimators=None, n_neighbors=None,
         check_option("estimators", name, tuple(ESTIMATORS))
     k = check_number("n_neighbors", CFG.n_neighbors if n_neighbors is None else n_neighbors,
                      low=2, low_inclusive=True, integer=True)
-    max_points = check_number("max_points", CFG.max_points if max_points is None
-                              else max_points, low=10, low_inclusive=True, integer=True)
-    theiler = check_number("theiler", CFG.theiler if theiler is None else theiler, low=0,
-                           low_inclusive=True, integer=True)
-    transient = check_number("transient", (CFG.transient if is_rec else 0.0)
-                             if transient is None else transient, low=0, low_inclusive=True,
-                             high=1, high_inclusive=False)
+    max_points, theiler, transient = sampling_options(CFG, is_rec, max_points, theiler,
+                                                      transient)
     seed = CFG.seed if seed is None else seed
     points, order, trial, info = _points(rec_or_array, max_points=max_points,
                                          transient=transient, seed=seed)

@@ -34,6 +34,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import hippo_probe as hp  # noqa: E402
+from hippo_probe._atomic import save_figure, write_text  # noqa: E402
 from hippo_probe.analysis import AnalysisWarning  # noqa: E402
 from hippo_probe.paper.config import jsonable  # noqa: E402
 
@@ -181,8 +182,8 @@ def figure(groups, time_info, out, subtitle=""):
         ax_t.set_title(f"{time_info['network']}: {time_info['samples']} samples{note}",
                        fontsize=8)
     out.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out / "cell_classes.png", dpi=130)
-    fig.savefig(out / "cell_classes.pdf")
+    save_figure(fig, out / "cell_classes.png", dpi=130)
+    save_figure(fig, out / "cell_classes.pdf")
     plt.close(fig)
 
 
@@ -254,8 +255,8 @@ def main():
                   f"opexebo's on the same maps "
                   f"{time_info['opexebo_grid_border_observed_per_256_units_s']:.1f} s "
                   f"(timed on {time_info['opexebo_units_timed']} units).")]
-    (out / "cell_classes.md").write_text("\n".join(lines) + "\n")
-    (out / "cell_classes.json").write_text(json.dumps(jsonable({
+    write_text(out / "cell_classes.md", "\n".join(lines) + "\n", what="class table")
+    write_text(out / "cell_classes.json", json.dumps(jsonable({
         "trials": a.trials, "n_shuffles": a.shuffles, "seed": SEED,
         "hippo_probe": hp.__version__, "groups": groups, "timing": time_info,
         "rules": tables[names[0]].attrs["rules"] if names else None}), indent=1))

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 
+from hippo_probe._atomic import write_text
 from hippo_probe.baselines import particle_filter
 from hippo_probe.tasks import make_trials
 
@@ -45,10 +46,10 @@ def main():
              "| --- | --- | --- | --- |", *rows]
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "pf_convergence.md").write_text(
-        f"{a.trials} test trials per task, the same trials at every particle count.\n\n"
-        + "\n".join(lines) + "\n")
-    (out / "pf_convergence.json").write_text(json.dumps(
+    write_text(out / "pf_convergence.md",
+               f"{a.trials} test trials per task, the same trials at every particle count."
+               "\n\n" + "\n".join(lines) + "\n")
+    write_text(out / "pf_convergence.json", json.dumps(
         {"trials": a.trials, "errors": table}, indent=1))
     print("\n".join(lines))
 

@@ -22,6 +22,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from hippo_probe._atomic import save_figure  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 RUNS = {"fp32": "fp32, init seed 0", "bf16": "bf16, init seed 0",
         "fp32_seed1": "fp32, init seed 1"}
@@ -56,7 +58,7 @@ def main():
         axis.legend(fontsize=8, frameon=False)
     fig.suptitle("generalized task, darkness world: bf16 vs fp32 training (1 thread each)")
     Path(a.out).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(a.out, dpi=120)
+    save_figure(fig, a.out, dpi=120)
     print(f"saved {a.out}")
 
 

@@ -342,7 +342,9 @@ def hd_polar(tuning, *, units=None, group=None, max_cols=6, panel=1.8, fig=None,
     Each panel is titled with its unit, the unit's ``region`` when the result has one,
     the mean vector length R and the preferred direction in degrees (0-360,
     counter-clockwise from +x, the convention of the polar axes, whose ticks are in
-    degrees too).
+    degrees too). The radius starts at 0: for signed activity (LSTM h) the curve is drawn
+    minus the ``rate_offset`` that R was computed without (the unit's minimum), so a
+    weakly tuned unit is a nearly round curve, as its small R says.
 
     Parameters
     ----------
@@ -367,7 +369,10 @@ def hd_polar(tuning, *, units=None, group=None, max_cols=6, panel=1.8, fig=None,
     curves = tuning["tuning_curve"] if isinstance(tuning, xr.Dataset) else tuning
     curves, group_dim, label = _pick_group(curves, ("unit", "direction"), group)
     curves = _units(curves, units, 48).transpose("unit", "direction")
+    offset = None
     if stats is not None:
+        if "rate_offset" in tuning and (tuning["rate_offset"] != 0).any():
+            offset = tuning["rate_offset"]
         stats = stats[["mean_vector_length", "preferred_direction"]]
         stats, _, _ = _pick_group(stats, ("unit",), label if group_dim else None)
     n = curves.sizes["unit"]
@@ -379,6 +384,8 @@ def hd_polar(tuning, *, units=None, group=None, max_cols=6, panel=1.8, fig=None,
         if "region" in curves.coords and curves["region"].dims == ("unit",) else []
     for ax, u in zip(axes, curves["unit"].values):
         r = curves.sel(unit=u).values
+        if offset is not None:
+            r = r - offset.sel(unit=u).item()
         colour = f"C{regions.index(curves['region'].sel(unit=u).item()) % 10}" \
             if regions else "C0"
         ax.plot(closed, np.r_[r, r[:1]], lw=1, color=colour)
@@ -407,17 +414,27 @@ def hd_polar(tuning, *, units=None, group=None, max_cols=6, panel=1.8, fig=None,
         title += f" \N{EM DASH} {group_dim} {label}"
     if stats is not None:
         title += "\nR: mean vector length; pref: preferred direction"
+    if offset is not None:
+        title += "; radius: activity above the unit's minimum"
     fig.suptitle(title, fontsize=8)
     return fig
 
 
-def cumulative(values, *, xlabel="", title="", ax=None):
+def cumulative(values, *, xlabel="", ylabel="cumulative fraction", title="", styles=None,
+               medians=False, ax=None):
     """Empirical cumulative distributions, one line per entry of ``values``.
 
     Parameters
     ----------
     values : dict of label -> array, or a DataArray (one line)
         NaNs are left out (and counted in the legend).
+    xlabel, ylabel, title : str
+    styles : dict of label -> dict, optional
+        Line properties of some entries (e.g. ``{"A vs B": {"color": "tab:red",
+        "ls": "--"}}``).
+    medians : bool
+        Mark each distribution's median (a dotted line of its colour; the value in the
+        legend).
     ax : matplotlib Axes, optional
         Draw into this axes (default: a new figure).
 
@@ -428,6 +445,7 @@ def cumulative(values, *, xlabel="", title="", ax=None):
     if isinstance(values, xr.DataArray):
         xlabel = xlabel or _label(values)
         values = {values.name or "values": values.values}
+    styles = styles or {}
     fig, ax = _one_axes(ax, (4, 3))
     for label, v in values.items():
         v = np.asarray(v, float).ravel()
@@ -436,10 +454,14 @@ def cumulative(values, *, xlabel="", title="", ax=None):
             continue
         y = np.arange(1, ok.size + 1) / ok.size
         dropped = v.size - ok.size
-        ax.step(ok, y, where="post", label=f"{label} (n={ok.size}"
-                + (f", {dropped} NaN)" if dropped else ")"))
+        text = f"{label} (n={ok.size}" + (f", {dropped} NaN" if dropped else "")
+        if medians:
+            text += f", median {np.median(ok):.2f}"
+        line, = ax.step(ok, y, where="post", label=text + ")", **styles.get(label, {}))
+        if medians:
+            ax.axvline(np.median(ok), color=line.get_color(), ls=":", lw=0.8)
     ax.set_xlabel(xlabel)
-    ax.set_ylabel("cumulative fraction")
+    ax.set_ylabel(ylabel)
     ax.set_ylim(0, 1.02)
     if title:
         ax.set_title(title, fontsize=9)
@@ -455,12 +477,10 @@ def remapping_cdf(sim, *, ax=None):
     groups = {"same environment": s.values[same], "different environment": s.values[~same],
               "same (labels permuted)": s.values[perm],
               "different (labels permuted)": s.values[~perm]}
-    fig = cumulative(groups, xlabel=_label(s), title="remapping", ax=ax)
-    ax = ax or fig.axes[0]
-    for line in ax.get_lines()[2:]:
-        line.set_linestyle("--")
-    ax.legend(fontsize=7, frameon=False)
-    return fig
+    styles = {"same environment": {"color": "C0"}, "different environment": {"color": "C1"},
+              "same (labels permuted)": {"color": "C0", "ls": "--"},
+              "different (labels permuted)": {"color": "C1", "ls": "--"}}
+    return cumulative(groups, xlabel=_label(s), title="remapping", styles=styles, ax=ax)
 
 
 def error_curves(err, *, variables=("euclidean", "radial", "angular"), colors=None,

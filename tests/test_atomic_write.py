@@ -1,10 +1,12 @@
 """The one atomic-write mechanism: refusals, clean-up of dead writers' temporaries."""
 
+import ast
 import os
 import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import pytest
 
@@ -82,3 +84,93 @@ def test_a_temporary_from_another_host_is_removed_only_when_old(tmp_path, monkey
     os.utime(other, (old, old))
     assert remove_stale(tmp_path) == [other]
     assert not other.exists()
+
+
+# ------------------------------------------------------------------ one mechanism
+PACKAGE = Path(_atomic.__file__).parent
+#: Module-level writers and renames; each must run inside ``with atomic_path(...)``.
+WRITERS = {("os", "replace"), ("os", "rename"), ("shutil", "move"), ("torch", "save"),
+           ("json", "dump"), ("pickle", "dump"), ("np", "save"), ("np", "savez"),
+           ("np", "savez_compressed"), ("pynwb", "NWBHDF5IO"), ("zarr", "open_group"),
+           ("zarr", "open")}
+#: Methods that write their receiver to a file.
+WRITING_METHODS = {"to_zarr", "to_netcdf", "savefig", "write_text", "write_bytes"}
+#: (file, function): why a write there is not a second mechanism.
+ALLOWED = {
+    ("_atomic.py", "_publish"): "the mechanism itself",
+    ("recording/store.py", "_write"): "called inside save_recording's atomic_path (or on "
+                                      "a URL, where object stores have no rename)",
+    ("tasks.py", "_discard"): "renames a damaged cache block aside to delete it",
+}
+
+
+def _writes_mode(call) -> bool:
+    modes = [a.value for a in call.args[1:2] if isinstance(a, ast.Constant)]
+    modes += [k.value.value for k in call.keywords
+              if k.arg == "mode" and isinstance(k.value, ast.Constant)]
+    return any(isinstance(m, str) and set(m) & set("wax+") for m in modes)
+
+
+def _direct_writes(tree):
+    """(function, what, line) of every file write or rename not inside ``atomic_path``."""
+    found = []
+
+    def visit(node, parents):
+        if isinstance(node, ast.Call):
+            fn, what = node.func, None
+            if isinstance(fn, ast.Attribute) and isinstance(fn.value, ast.Name) \
+                    and (fn.value.id, fn.attr) in WRITERS:
+                if fn.attr not in ("NWBHDF5IO", "open_group", "open") or _writes_mode(node):
+                    what = f"{fn.value.id}.{fn.attr}"
+            elif isinstance(fn, ast.Attribute) and fn.attr in WRITING_METHODS:
+                what = f".{fn.attr}()"
+            elif isinstance(fn, ast.Attribute) and fn.attr in ("replace", "rename") \
+                    and len(node.args) == 1 and not node.keywords \
+                    and getattr(fn.value, "id", None) != "dataclasses":
+                what = f"Path.{fn.attr}"          # tmp.replace(dest): a rename
+            elif isinstance(fn, ast.Name) and fn.id == "open" and _writes_mode(node):
+                what = "open(..., 'w')"
+            atomic = any(isinstance(p, ast.With) and any(
+                isinstance(i.context_expr, ast.Call)
+                and getattr(i.context_expr.func, "id", None) == "atomic_path"
+                for i in p.items) for p in parents)
+            if what and not atomic:
+                func = next((p.name for p in reversed(parents)
+                             if isinstance(p, (ast.FunctionDef, ast.AsyncFunctionDef))),
+                            "<module>")
+                found.append((func, what, node.lineno))
+        for child in ast.iter_child_nodes(node):
+            visit(child, [*parents, node])
+
+    visit(tree, [])
+    return found
+
+
+def test_every_file_the_package_writes_goes_through_atomic_path():
+    """One implementation of write-then-rename (issue 15 found seven): a write or rename
+    outside ``with atomic_path(...)`` is a second mechanism, unless listed in ALLOWED."""
+    stray = []
+    scripts = PACKAGE.parent / "analyses"        # the repository's analysis scripts too
+    for path in sorted(PACKAGE.rglob("*.py")) + sorted(scripts.glob("*.py")):
+        rel = path.relative_to(PACKAGE if path.is_relative_to(PACKAGE) else
+                               PACKAGE.parent).as_posix()
+        for func, what, line in _direct_writes(ast.parse(path.read_text(), str(path))):
+            if (rel, func) not in ALLOWED:
+                stray.append(f"{rel}:{line} {func}: {what}")
+    assert not stray, "writes outside hippo_probe._atomic.atomic_path:\n" + "\n".join(stray)
+
+
+def test_the_scan_sees_a_second_mechanism():
+    """The scan itself: the writer of log.json before issue 15 is found."""
+    old = ast.parse(textwrap.dedent("""
+        def save_log(run_dir, log):
+            with open(run_dir / "log.json", "w") as f:
+                json.dump(log, f)
+            tmp = run_dir / ".log.tmp"
+            tmp.write_text("{}")
+            tmp.replace(run_dir / "log.json")
+            with atomic_path(run_dir / "ok.json") as tmp:
+                tmp.write_text("{}")
+    """))
+    assert [w for _, w, _ in _direct_writes(old)] == [
+        "open(..., 'w')", "json.dump", ".write_text()", "Path.replace"]

@@ -3,6 +3,7 @@ wrong result or a third party's traceback. One test per probe of issue 15 not co
 the storage, checkpoint and CLI tests."""
 
 import glob
+import re
 import shutil
 import warnings
 
@@ -33,6 +34,8 @@ def rec(**kw):
      "`position` must hold real numbers"),
     (lambda: rec(environment=1.5), ValueError, "`environment` must hold integer ids"),
     (lambda: rec(activity=np.zeros((400, 0))), RecordingError, "at least one unit"),
+    (lambda: hp.validate(rec().isel(unit=slice(0, 0))), RecordingError,
+     "`activity` must have at least one unit; got 0 units"),
     (lambda: rec(activity=-np.ones((400, 3)), activity_kind="spike_count"), RecordingError,
      "whole numbers >= 0; got -1.0"),
     (lambda: rec(unit=[1, "a", 2.0]), TypeError, "`unit` ids must be all integers or all "
@@ -61,6 +64,9 @@ def test_an_argument_that_would_have_no_effect_is_refused():
 @pytest.mark.parametrize("call, words", [
     (lambda r: hp.ratemaps(r, bin_size=1e-4), r"`bin_size` asks for .* GiB"),
     (lambda r: hp.head_direction_tuning(r, n_bins=10**8), r"`n_bins` asks for .* GiB"),
+    (lambda r: hp.conjunctive_tuning(r, n_bins=10**5), r"`n_bins` asks for .* GiB"),
+    (lambda r: hp.conjunctive_tuning(r, n_directions=10**9),
+     r"`n_directions` asks for .* GiB"),
 ])
 def test_huge_bin_counts_are_refused_before_allocating(call, words):
     r = rec(head_direction=RNG.uniform(-3, 3, 400))
@@ -68,15 +74,31 @@ def test_huge_bin_counts_are_refused_before_allocating(call, words):
         call(r)
 
 
-def test_a_string_seed_is_named():
-    with pytest.raises(TypeError, match="`seed` must be an integer; got 'a'"):
-        hp.spatial_information(rec(), n_shuffles=3, seed="a")
+@pytest.mark.parametrize("call", [
+    lambda r, s: hp.spatial_information(r, n_shuffles=3, seed=s),
+    lambda r, s: hp.head_direction_tuning(r, n_shuffles=3, seed=s),
+    lambda r, s: hp.conjunctive_tuning(r, n_shuffles=3, seed=s),
+    lambda r, s: hp.correlation_dimension(r, seed=s),
+    lambda r, s: hp.tasks.make_trials("localization", 1, "test", s),
+    lambda r, s: hp.load_pretrained("localization_compass", seed=s),
+], ids=["spatial_information", "head_direction_tuning", "conjunctive_tuning",
+        "correlation_dimension", "make_trials", "load_pretrained"])
+@pytest.mark.parametrize("seed", ["a", 1.5])
+def test_a_seed_that_is_not_an_integer_is_named(call, seed):
+    with pytest.raises(TypeError, match=f"`seed` must be an integer; got {seed!r}"):
+        call(rec(head_direction=RNG.uniform(-3, 3, 400)), seed)
 
 
-def test_a_recording_of_zero_samples_says_so():
-    empty = rec().isel(time=slice(0, 0))
+@pytest.mark.parametrize("analysis", [
+    "ratemaps", "spatial_information", "spatial_selectivity", "place_fields",
+    "place_field_stability", "head_direction_tuning", "conjunctive_tuning", "border_score",
+    "grid_score", "speed_score", "classify_cells", "context_cells", "remapping_similarity",
+    "decode_environment", "correlation_dimension", "intrinsic_dimension"])
+def test_a_recording_of_zero_samples_says_so(analysis):
+    """Not "all NaN", not numpy's "cannot reshape array of size 0"."""
+    empty = rec(head_direction=RNG.uniform(-3, 3, 400)).isel(time=slice(0, 0))
     with pytest.raises(ValueError, match="`rec` has 0 samples"):
-        hp.ratemaps(empty)
+        getattr(hp, analysis)(empty)
 
 
 def test_a_few_far_samples_setting_the_extent_are_warned_about():
@@ -103,10 +125,31 @@ def test_bytes_paths_work_like_str_paths(tmp_path):
     assert open_recording(dest).sizes["unit"] == 3
 
 
-def test_chunks_that_mean_nothing_are_not_called_corruption(tmp_path):
+@pytest.mark.parametrize("chunks", ["bogus", 1.5, ["time"]])
+def test_chunks_that_mean_nothing_are_not_called_corruption(chunks, tmp_path):
     save_recording(rec(), tmp_path / "r.zarr")
-    with pytest.raises(ValueError, match="`chunks` must be 'trials', a dict"):
-        open_recording(tmp_path / "r.zarr", chunks="bogus")
+    with pytest.raises(ValueError, match=r"`chunks` must be 'trials', a dict of chunk sizes "
+                                         r"per dimension, an int or None; got "
+                                         + re.escape(repr(chunks))):
+        open_recording(tmp_path / "r.zarr", chunks=chunks)
+
+
+@pytest.mark.parametrize("then", ["overwritten", "removed"])
+def test_a_lazy_recording_whose_store_is_replaced_refuses_to_read(then, tmp_path):
+    """Without the check the old handle read the new store's values (or zarr's fill
+    value, 0, for a removed one), silently."""
+    path = tmp_path / "r.zarr"
+    save_recording(rec(), path)
+    lazy = open_recording(path)
+    if then == "overwritten":
+        save_recording(rec(activity=np.full((400, 3), 2.0)), path, overwrite=True)
+    else:
+        shutil.rmtree(path)
+    with pytest.raises(RecordingError, match=f"`path` {path} was replaced or removed after "
+                                             f"this recording was opened"):
+        lazy.activity.sum().compute()
+    if then == "overwritten":               # opened again, it reads the new store
+        assert float(open_recording(path).activity.mean()) == 2.0
 
 
 def test_a_flipped_byte_in_a_chunk_names_the_variable_and_the_store(tmp_path):
@@ -121,46 +164,70 @@ def test_a_flipped_byte_in_a_chunk_names_the_variable_and_the_store(tmp_path):
         open_recording(path).activity.sum().compute()
 
 
-def test_nwb_paths_that_are_directories_say_so(tmp_path):
-    with pytest.raises(IsADirectoryError, match="`path` must be an NWB file; got the "
-                                                "directory"):
-        from_nwb(tmp_path)
-    with pytest.raises(IsADirectoryError, match="`path` must name an .nwb file"):
-        to_nwb(rec(), tmp_path, overwrite=True)
+@pytest.mark.parametrize("call, words", [
+    (lambda d: from_nwb(d), "`path` must be an NWB file; got the directory"),
+    (lambda d: to_nwb(rec(), d, overwrite=True), "`path` must name an .nwb file"),
+], ids=["from_nwb", "to_nwb"])
+def test_nwb_paths_that_are_directories_say_so(call, words, tmp_path):
+    """Not "does not exist" (from_nwb), not h5py's error (to_nwb)."""
+    (tmp_path / "keep").write_text("")
+    with pytest.raises(IsADirectoryError, match=words):
+        call(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["keep"]
 
 
-def test_to_nwb_creates_a_missing_folder_and_refuses_an_empty_recording(tmp_path):
+def test_to_nwb_creates_a_missing_folder(tmp_path):
     pytest.importorskip("pynwb")
     dest = tmp_path / "new" / "r.nwb"
     with warnings.catch_warnings():
         warnings.simplefilter("error", UserWarning)      # e.g. pynwb's "not .nwb" warning
         to_nwb(rec(), dest)
     assert from_nwb(dest, epoch=None).sizes["unit"] == 3
-    with pytest.raises(RecordingError, match="at least one sample"):
+
+
+def test_to_nwb_refuses_an_empty_recording(tmp_path):
+    pytest.importorskip("pynwb")
+    with pytest.raises(RecordingError, match="`time` must hold at least one sample; got a "
+                                             "recording of 0 samples"):
         to_nwb(rec().isel(time=slice(0, 0)), tmp_path / "empty.nwb")
+    assert not list(tmp_path.iterdir())
 
 
-def test_an_nwb_file_with_a_garbled_block_is_refused_naming_the_variable(tmp_path):
+@pytest.mark.parametrize("dataset, words", [
+    ("data", r"`position` in .* holds 10 values beyond 1000 m \(first 6e\+206"),
+    ("timestamps", r"`position timestamps` in .* holds 10 values beyond 1e\+07 s "
+                   r"\(first 6e\+206"),
+    ("spike_times", r"`spike_times` in .* holds 10 values beyond 1e\+07 s "
+                    r"\(first 6e\+206 at index 100\)"),
+], ids=["position", "timestamps", "spike times"])
+def test_an_nwb_file_with_a_garbled_block_is_refused_naming_the_variable(dataset, words,
+                                                                         tmp_path):
     pytest.importorskip("pynwb")
     h5py = pytest.importorskip("h5py")
     garbled = tmp_path / "garbled.nwb"
     shutil.copy(NWB, garbled)
+    blocks = {"data": ["acquisition/Position/x/data"], "spike_times": ["units/spike_times"],
+              "timestamps": [f"acquisition/Position/{axis}/timestamps"    # one per axis
+                             for axis in "xyz"]}[dataset]
     with h5py.File(garbled, "r+") as f:
-        x = f["acquisition/Position/x/data"]
-        values = x[:]
-        values[100:110] = 6e206
-        x[:] = values
-    with pytest.raises(RecordingError, match=r"`position` in .* holds 10 values beyond "
-                                             r"1000 m \(first 6e\+206"):
+        for name in blocks:
+            block = f[name]
+            values = block[:]
+            values[100:110] = 6e206
+            block[:] = values
+    with pytest.raises(RecordingError, match=words):
         from_nwb(garbled)
 
 
-def test_load_pretrained_names_what_it_expected():
-    with pytest.raises(TypeError, match="`name` must be a shipped network's name"):
-        hp.load_pretrained(None)
-    with pytest.raises(ValueError, match="`seed` 7 of the network 'generalized_compass' is "
-                                         "not shipped; shipped seeds: \\[0"):
-        hp.load_pretrained("generalized_compass", seed=7)
+@pytest.mark.parametrize("kwargs, error, words", [
+    (dict(name=None), TypeError, "`name` must be a shipped network's name"),
+    (dict(name=""), TypeError, "`name` must be a shipped network's name"),
+    (dict(name="generalized_compass", seed=7), ValueError,
+     "`seed` 7 of the network 'generalized_compass' is not shipped; shipped seeds: \\[0"),
+], ids=["None", "empty", "unshipped seed"])
+def test_load_pretrained_names_what_it_expected(kwargs, error, words):
+    with pytest.raises(error, match=words):
+        hp.load_pretrained(**kwargs)
 
 
 # ------------------------------------------------------------------ the command line
@@ -172,25 +239,26 @@ def shipped():
     return load(resolve_network_file("localization_compass"))
 
 
-def test_a_checkpoint_of_other_shapes_is_one_clear_line(shipped, tmp_path, capsys):
+@pytest.mark.parametrize("damage, words", [("shapes", "size mismatch"),
+                                           ("missing", "Missing key")])
+def test_a_checkpoint_of_other_shapes_is_one_clear_line(damage, words, shipped, tmp_path,
+                                                        capsys):
+    """Not torch's RuntimeError from load_state_dict."""
     import torch
 
     from hippo_probe.training.checkpoint import save_atomic
 
-    bad = dict(shipped, model={k: (torch.zeros(3, 3) if i == 0 else v)
-                               for i, (k, v) in enumerate(shipped["model"].items())})
-    save_atomic(bad, tmp_path / "bad.pt")
+    first = next(iter(shipped["model"]))
+    model = dict(shipped["model"])
+    if damage == "shapes":
+        model[first] = torch.zeros(3, 3)
+    else:
+        del model[first]
+    save_atomic(dict(shipped, model=model), tmp_path / "bad.pt")
     assert main(["evaluate", str(tmp_path / "bad.pt"), "--trials", "1"]) == 2
     err = capsys.readouterr().err
-    assert "does not fit this Navigator" in err and "size mismatch" in err
+    assert "does not fit this Navigator" in err and words in err and first in err
     assert err.count("\n") == 1
-    # a parameter missing altogether
-    first = next(iter(shipped["model"]))
-    save_atomic(dict(shipped, model={k: v for k, v in shipped["model"].items() if k != first}),
-                tmp_path / "missing.pt")
-    assert main(["evaluate", str(tmp_path / "missing.pt"), "--trials", "1"]) == 2
-    err = capsys.readouterr().err
-    assert "does not fit this Navigator" in err and "Missing key" in err and first in err
 
 
 def test_resuming_a_checkpoint_without_optimizer_state_names_what_is_missing(
@@ -211,6 +279,54 @@ def test_export_of_a_checkpoint_without_a_log_is_a_clear_error(shipped, tmp_path
     save_atomic({k: v for k, v in shipped.items() if k != "test"}, tmp_path / "checkpoint.pt")
     assert main(["export-network", str(tmp_path), "x", "--dest", str(tmp_path / "d")]) == 2
     assert "lacks ['log'" in capsys.readouterr().err
+    assert not (tmp_path / "d").exists()                 # no empty folder left behind
+
+
+def _exportable(shipped, run):
+    """A run's checkpoint made of a shipped network: what export-network needs."""
+    from hippo_probe.training.checkpoint import save_atomic
+
+    save_atomic(dict(shipped, log={"class_weight": 0.0}, step=1, best_model=None,
+                     best_loss=1.0), run / "checkpoint.pt")
+    return run
+
+
+@pytest.mark.parametrize("command", ["export-network", "world-stats --json",
+                                     "world-stats --plot"])
+def test_outputs_into_a_folder_that_does_not_exist_are_written(command, shipped, tmp_path):
+    """The folders are made, not a torch RuntimeError ("Parent directory does not exist")
+    or a FileNotFoundError."""
+    new = tmp_path / "new" / "deeper"
+    if command == "export-network":
+        argv = ["export-network", str(_exportable(shipped, tmp_path)), "x", "--dest",
+                str(new)]
+        made = [new / "x.pt", new / "x.log.json"]
+    else:
+        made = [new / ("stats.json" if command.endswith("json") else "trials.png")]
+        argv = ["world-stats", "--trials", "2", command.split()[1], str(made[0])]
+    assert main(argv) == 0
+    assert all(p.is_file() for p in made)
+    assert sorted(p.name for p in new.iterdir()) == sorted(p.name for p in made)
+
+
+def test_export_onto_a_file_is_one_clear_line(shipped, tmp_path, capsys):
+    (tmp_path / "a_file").write_text("")
+    run = _exportable(shipped, tmp_path / "run")
+    assert main(["export-network", str(run), "x", "--dest", str(tmp_path / "a_file")]) == 2
+    assert "--dest {} is a file; give a folder".format(tmp_path / "a_file") in \
+        capsys.readouterr().err
+
+
+@pytest.mark.parametrize("option, name", [("--particles", "n_particles"),
+                                          ("--slam-particles", "slam_particles")])
+def test_zero_particles_are_refused_not_replaced_by_the_default(option, name, tmp_path,
+                                                                 capsys):
+    """`--particles 0` once ran the default 1,000 particles, silently."""
+    out = tmp_path / "b.zarr"
+    assert main(["baselines", "--task", "specialized", "--trials", "1", option, "0",
+                 "--out", str(out), "--no-progress"]) == 2
+    assert f"`{name}` must be > 0; got 0" in capsys.readouterr().err
+    assert not out.exists() and not list(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize("argv, words", [

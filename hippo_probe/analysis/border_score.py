@@ -8,6 +8,7 @@ import numpy as np
 import xarray as xr
 from scipy import optimize
 
+from .._angles import wrap_angle
 from .._validators import check_number, check_option, check_shape
 from . import _common
 from ._common import refuse_map_options
@@ -87,13 +88,13 @@ def polygon_walls(vertices, merge_angle):
     length = np.hypot(d[:, 0], d[:, 1])
     ang = np.arctan2(d[:, 1], d[:, 0])
     n = len(ang)
-    turn = np.abs(np.angle(np.exp(1j * (ang - np.roll(ang, 1)))))
+    turn = np.abs(wrap_angle(ang - np.roll(ang, 1)))
     start = int(np.argmax(turn))  # never split a straight run at the list's start
     walls, current, ref = [], [], 0j
     for k in range(n):
         e = (start + k) % n
         z = length[e] * np.exp(1j * ang[e])
-        if current and abs(np.angle(np.exp(1j * ang[e]) / (ref / abs(ref)))) >= merge_angle:
+        if current and abs(wrap_angle(ang[e] - np.angle(ref))) >= merge_angle:
             walls.append(current)
             current, ref = [], 0j
         current.append(e)

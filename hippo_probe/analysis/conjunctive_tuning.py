@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from .._validators import check_number, check_option
+from .._validators import check_allocation, check_number, check_option
 from . import _common
 from ._common import AnalysisWarning
 from ._common import shifts_for
@@ -96,7 +96,13 @@ def conjunctive_arrays(rec, *, n_shuffles, seed, n_bins, n_dir, min_speed, exten
     """Observed (row 0) and shuffled HD lengths, direction-factor lengths and
     position-factor information (K + 1, U), with the observed factors."""
     xy = _positions(rec)
+    shifts = shifts_for(rec, n_shuffles, seed)
     grid = spatial_grid(rec, None, extent, n_bins=n_bins, xy=xy)
+    n_x = grid.nx * grid.ny
+    # the joint sums of a batch of shifts, (shifts, units, directions, places): refused
+    # before allocating, naming the larger of the two bin counts
+    check_allocation("n_bins" if n_x >= n_dir else "n_directions",
+                     (min(len(shifts), CONJUNCTIVE.batch), rec.sizes["unit"], n_dir, n_x))
     pos, dropped = position_bins(rec, grid, min_speed=min_speed, xy=xy)
     hd = _common.values(rec["head_direction"])
     d_bins = direction_bins(hd, n_dir)
@@ -109,9 +115,7 @@ def conjunctive_arrays(rec, *, n_shuffles, seed, n_bins, n_dir, min_speed, exten
     if min_speed is not None:
         with np.errstate(invalid="ignore"):
             bins_60[~(_common.speed(rec) >= min_speed)] = -1
-    shifts = shifts_for(rec, n_shuffles, seed)
     scale = _common.rate_scale(rec)[0]
-    n_x = grid.nx * grid.ny
 
     hd_len, hd_phase, why = _hd_lengths(rec, bins_60, shifts, scale)
     length_parts, info_parts, phase0 = [], [], None

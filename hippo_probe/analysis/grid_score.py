@@ -7,6 +7,7 @@ import xarray as xr
 from scipy import fft as sfft
 from scipy import ndimage
 
+from .._angles import wrap_angle
 from .._validators import check_number, check_option
 from . import _common
 from ._common import refuse_map_options
@@ -244,7 +245,7 @@ def six_peaks(acorr, r_in, r_max, threshold, min_orientation):
         kept, angles = [], []
         for i in order:
             ang = np.arctan2(off[i, 0], off[i, 1])
-            if any(abs(np.angle(np.exp(1j * (ang - b)))) < min_orientation for b in angles):
+            if any(abs(wrap_angle(ang - b)) < min_orientation for b in angles):
                 continue
             oy, ox = _subbin(acorr[m], ys[i], xs[i])
             kept.append((ys[i] - cy + oy, xs[i] - cx + ox))

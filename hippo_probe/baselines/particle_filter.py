@@ -175,7 +175,8 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
     keep = np.unique(np.asarray(keep, dtype=np.int64))
     if keep.size and (keep.min() < 0 or keep.max() >= n_steps):
         raise ValueError(f"`keep` must hold steps in [0, {n_steps - 1}]; got {keep.tolist()}")
-    threads = check_positive("threads", threads or os.cpu_count() or 1, integer=True)
+    threads = check_positive("threads", (os.cpu_count() or 1) if threads is None else threads,
+                             integer=True)
     pf = baseline.particle_filter
     model = ContactModel.from_config(config.world, baseline.contact)
     noise = config.world.noise

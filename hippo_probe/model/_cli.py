@@ -75,5 +75,7 @@ def _record(a):
 def _export(a):
     from ..training.export import export_network
 
+    if a.dest is not None:
+        check_output("--dest", a.dest, kind="folder")
     paths = export_network(a.run_dir, a.name, dest=a.dest)
     print("\n".join(f"wrote {p}" for p in paths))

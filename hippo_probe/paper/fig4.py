@@ -80,16 +80,12 @@ def _maps_panel(sub, rec, title, numbers, key):
                  label="activity, scaled per unit (0 = min, 1 = max)").ax.tick_params(
                      labelsize=6)
     ax = fig.add_subplot(gs[:, 3])
-    for values, colour, label in ((same, "k", "A vs A"), (across, "tab:red", "A vs B")):
-        values = np.sort(values[np.isfinite(values)])
-        ax.plot(values, np.arange(1, len(values) + 1) / len(values), color=colour,
-                label=f"{label} (median {np.median(values):.2f})")
-        ax.axvline(np.median(values), color=colour, ls=":", lw=0.8)
-    ax.set_xlabel("rate-map correlation (Pearson)", fontsize=8)
-    ax.set_ylabel("cumulative fraction of units", fontsize=8)
-    ax.legend(frameon=False, fontsize=8)
+    hp.plot.cumulative({"A vs A": same, "A vs B": across}, medians=True, ax=ax,
+                       styles={"A vs A": {"color": "k"}, "A vs B": {"color": "tab:red"}},
+                       xlabel="rate-map correlation (Pearson)",
+                       ylabel="cumulative fraction of units",
+                       title="stability across all units")
     ax.tick_params(labelsize=7)
-    ax.set_title("stability across all units", fontsize=9)
     sub.suptitle(f"{title} (the {N_EXAMPLES} most spatially selective units)", fontsize=10,
                  x=0.02, ha="left")
     numbers[key] = {"stability_same_arena_median": float(np.nanmedian(same)),
@@ -117,21 +113,11 @@ def make(cfg, out):
     hd = hp.head_direction_tuning(many, n_bins=60)
     mvl = hd.mean_vector_length.values.ravel()
     show = np.argsort(-np.nan_to_num(mvl))[:20]
-    theta = hd.direction.values
+    hp.plot.hd_polar(hd, units=many.unit.values[show], max_cols=5, fig=top[1])
+    # after hd_polar, whose own title this replaces
     top[1].suptitle("C1  head-direction tuning of the 20 most tuned units (specialized "
-                    "network, 60 bins;\nradius from 0 = the unit's minimum, 0° to the right)",
-                    fontsize=10)
-    for k, u in enumerate(show):
-        ax = top[1].add_subplot(4, 5, k + 1, projection="polar")
-        # the rate R is computed from (curve minus the unit's minimum over the recording),
-        # drawn from zero at the centre: a weakly tuned unit is a nearly round curve
-        r = hd.tuning_curve.isel(unit=u).values - float(hd.rate_offset.isel(unit=u))
-        ax.plot(np.append(theta, theta[0]), np.append(r, r[0]), lw=0.8)
-        ax.set_ylim(0, np.nanmax(r) * 1.05)
-        ax.set_xticks([0, np.pi / 2, np.pi, 3 * np.pi / 2])
-        ax.set_xticklabels([])
-        ax.set_yticks([])
-        ax.set_title(f"{int(many.unit[u])}: R={mvl[u]:.2f}", fontsize=6)
+                    "network, 60 bins;\nradius from 0 = the unit's minimum, 0° = +x, "
+                    "counter-clockwise)", fontsize=10)
     numbers["C_mean_vector_length"] = {
         "median_all_units": float(np.nanmedian(mvl)),
         "max": float(np.nanmax(mvl)), "shown_units": many.unit.values[show],
@@ -149,27 +135,26 @@ def make(cfg, out):
 
     ax = bottom[0].add_subplot(1, 1, 1)
     colours = {"same": "tab:blue", "different": "tab:orange"}
+    groups, styles = {}, {}
     for centred, style in ((False, ":"), (True, "-")):
         sim = hp.remapping_similarity(many, center_units=centred)
         s = sim.similarity.values
         kind = "units centred" if centred else "raw, not centred"
         for name, mask in (("same", sim.same_environment.values),
                            ("different", ~sim.same_environment.values)):
-            values = np.sort(s[mask & np.isfinite(s)])
-            if len(values):
-                ax.plot(values, np.arange(1, len(values) + 1) / len(values), ls=style,
-                        color=colours[name], label=f"{name} arena ({kind})")
+            label = f"{name} arena ({kind})"
+            groups[label] = s[mask]
+            styles[label] = {"color": colours[name], "ls": style}
         if centred:     # the control: labels permuted, all pairs of the centred measure
-            perm = sim.same_environment_permuted.values
-            values = np.sort(s[perm & np.isfinite(s)])
-            if len(values):
-                ax.plot(values, np.arange(1, len(values) + 1) / len(values), ls="--",
-                        color="gray", label="same arena, labels shuffled (centred)")
+            label = "same arena, labels shuffled (centred)"
+            groups[label] = s[sim.same_environment_permuted.values]
+            styles[label] = {"color": "gray", "ls": "--"}
         key = "D_similarity_units_centred" if centred else "D_similarity"
         numbers[key] = {c: float(sim["mean"].sel(comparison=c))
                         for c in sim.comparison.values}
-    ax.set_xlabel("population-vector correlation between trials")
-    ax.set_ylabel("cumulative fraction of trial pairs")
+    hp.plot.cumulative(groups, styles=styles, ax=ax,
+                       xlabel="population-vector correlation between trials",
+                       ylabel="cumulative fraction of trial pairs")
     ax.set_title("D remapping (specialized network); centred: each unit's mean removed",
                  fontsize=9)
     # the top left is empty: the different-arena curves reach it only right of x = 0.3

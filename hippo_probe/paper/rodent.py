@@ -93,16 +93,12 @@ def make(cfg, out, session=None):
               ("spatial_information", "Skaggs information (bits per unit of activity)",
                [n for n in groups if n not in mice]),
               ("selectivity", "spatial selectivity (variance explained)", list(groups))]
-    for ax, (key, label, names) in zip(axes, panels):
-        for name in names:
-            g = groups[name]
-            v = np.sort(g[key][np.isfinite(g[key])])
-            if len(v):
-                ax.plot(v, np.arange(1, len(v) + 1) / len(v), drawstyle="steps-post",
-                        color=colors[name], label=f"{name}, n = {g['n_units']}")
-        ax.set_xlabel(label)
-        ax.set_ylabel("cumulative fraction of units")
-        ax.set_ylim(0, 1.02)
+    for k, (ax, (key, label, names)) in enumerate(zip(axes, panels)):
+        hp.plot.cumulative({name: groups[name][key] for name in names}, ax=ax,
+                           styles={name: {"color": colors[name]} for name in names},
+                           xlabel=label, ylabel="cumulative fraction of units")
+        if k:      # one legend (the first panel names every group)
+            ax.get_legend().remove()
     axes[0].legend(frameon=False, fontsize=8, loc="lower right")
     fig.suptitle("Same analyses, same recording layout: mouse cells vs network units")
     out.mkdir(parents=True, exist_ok=True)

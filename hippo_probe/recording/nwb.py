@@ -81,8 +81,8 @@ def _pick(found, name, what, path):
 
 #: Plausibility rule for imported values (a garbled HDF5 block reads as numbers like
 #: 6e206): positions within 1 km of the origin (no lab arena comes close) and times
-#: within 1e7 s (116 days) of the session start, angles within 1e6 rad. Anything beyond
-#: is refused, named.
+#: (tracking timestamps, spike times) within 1e7 s (116 days) of the session start,
+#: angles within 1e6 rad. Anything beyond is refused, named.
 MAX_POSITION_M = 1e3
 MAX_TIME_S = 1e7
 MAX_ANGLE_RAD = 1e6      # unwrapped angles may hold many turns; not 1e6 radians of them
@@ -426,7 +426,7 @@ def _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction, head_directi
     trial_env = _trial_environment(nwb, environment, ids, from_trials)
 
     values, unit_ids, unit_coords, kind = _read_activity(
-        nwb, activity, keep, time, index, starts, stops)
+        nwb, activity, keep, time, index, starts, stops, path)
     # a file written by to_nwb carries the recording's own attrs: restore them exactly
     attrs = _saved_attrs(nwb) or {
         "source": "animal", "activity_kind": kind,
@@ -483,7 +483,7 @@ def _trial_environment(nwb, environment, ids, from_trials):
     return np.full(ids.size, int(environment))
 
 
-def _read_activity(nwb, activity, keep, time, index, starts, stops):
+def _read_activity(nwb, activity, keep, time, index, starts, stops, path):
     module = nwb.processing.get(MODULE)
     series = module.data_interfaces.get("activity") if module is not None else None
     if activity == "series" or (activity == "auto" and series is not None):
@@ -502,6 +502,8 @@ def _read_activity(nwb, activity, keep, time, index, starts, stops):
         raise RecordingError("the NWB file has no Units table (spike times) and no "
                              f"processing/{MODULE}/activity series")
     spikes = [np.asarray(units["spike_times"][i], dtype=float) for i in range(len(units))]
+    # a garbled spike time would fall outside every trial and vanish from the counts
+    _check_plausible("spike_times", np.concatenate(spikes), MAX_TIME_S, "s", path)
     values = bin_spikes(spikes, time, index, starts, stops)
     coords = {}
     for col in units.colnames:

@@ -235,9 +235,14 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     :class:`~hippo_probe.errors.RecordingError`; a corrupted chunk raises when read (its
     CRC32C checksum fails).
 
-    A lazy recording reads its store when computed: if the store at ``path`` is replaced
-    afterwards (``save_recording(..., overwrite=True)``), the old handle reads the new
-    store's chunks. Re-open after an overwrite, or ``.load()`` what must stay fixed.
+    A lazy recording reads its store when computed. If the store at ``path`` is replaced
+    (``save_recording(..., overwrite=True)``) or removed after it was opened, a read
+    raises :class:`~hippo_probe.errors.RecordingError` instead of returning the new
+    store's data (or zarr's fill value for chunks that are gone): re-open it, or
+    ``.load()`` what must stay fixed. The check compares the identity of the store's
+    ``zarr.json`` (device, inode, modification time) at each chunk read with the one seen
+    at opening; it is made for local stores read through dask (not for URLs, nor with
+    ``chunks=None``).
 
     Parameters
     ----------
@@ -274,13 +279,14 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
             raise FileNotFoundError(f"`path` does not exist: {local}{hint}")
         path = str(local)
     _check_complete(path, storage_options)
+    opened = None if _is_url(path) else _identity(path)
     storage = {} if chunks == "trials" else chunks
     try:
-        rec = _open(path, storage, storage_options)
+        rec = _open(path, storage, storage_options, opened)
         if chunks == "trials":
             aligned = _trial_chunks(rec, config)
             if aligned is not None:
-                rec = _open(path, {"time": aligned}, storage_options)
+                rec = _open(path, {"time": aligned}, storage_options, opened)
     except RecordingError:
         raise
     except Exception as err:
@@ -289,12 +295,34 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     return validate(rec)
 
 
-def _read_chunk(path, array, index, *args, **kwargs):
-    """dask's getter, with a failure (a chunk that fails its CRC32C checksum, a chunk file
-    gone since opening) raised as a RecordingError naming the variable and the store."""
+def _identity(path):
+    """(device, inode, mtime) of a local store's ``zarr.json``; None if it is gone. A store
+    written anew (an overwrite is a new directory renamed into place) has another one."""
     try:
-        return dask_getter(array, index, *args, **kwargs)
+        st = os.stat(os.path.join(path, "zarr.json"))
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino, st.st_mtime_ns
+
+
+def _check_same_store(path, opened):
+    if opened is not None and _identity(path) != opened:
+        raise RecordingError(f"`path` {os.fspath(path)} was replaced or removed after this "
+                             f"recording was opened; its data now would come from another "
+                             f"store (or be missing): open it again (or .load() a recording "
+                             f"that must outlive an overwrite)")
+
+
+def _read_chunk(path, opened, array, index, *args, **kwargs):
+    """dask's getter, with a failure (a chunk that fails its CRC32C checksum, a chunk file
+    gone since opening) raised as a RecordingError naming the variable and the store, and
+    a read from a store replaced or removed since opening refused (``opened``: its
+    :func:`_identity` then). The identity is checked after the read: a store replaced
+    during it is caught, and an overwrite never brings the opened store back."""
+    try:
+        block = dask_getter(array, index, *args, **kwargs)
     except Exception as err:
+        _check_same_store(path, opened)
         inner = array
         while getattr(inner, "array", None) is not None or getattr(inner, "_array", None) \
                 is not None:
@@ -303,6 +331,8 @@ def _read_chunk(path, array, index, *args, **kwargs):
         raise RecordingError(f"`{name}` of the store {os.fspath(path)} could not be read at "
                              f"{_slices(index)}: {type(err).__name__}: {err} (a damaged "
                              f"chunk; re-copy or re-save the recording)") from err
+    _check_same_store(path, opened)
+    return block
 
 
 def _slices(index) -> str:
@@ -311,12 +341,13 @@ def _slices(index) -> str:
     return "[" + ", ".join(parts) + "]"
 
 
-def _open(path, chunks, storage_options):
+def _open(path, chunks, storage_options, opened=None):
+    getitem = functools.partial(_read_chunk, path, opened)
     with warnings.catch_warnings():
         # trial-aligned dask chunks may cut stored chunks; intended (see open_recording)
         warnings.filterwarnings("ignore", message="The specified chunks separate")
         rec = xr.open_zarr(path, chunks=chunks, storage_options=storage_options,
-                           from_array_kwargs={"getitem": functools.partial(_read_chunk, path)},
+                           from_array_kwargs={"getitem": getitem},
                            **_OPEN_KW)
     rec.attrs.pop(COMPLETE_MARKER, None)
     # string coords come back as numpy's StringDType; in memory (from_arrays, from_nwb,

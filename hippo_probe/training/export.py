@@ -36,8 +36,7 @@ def export_network(run_dir, name: str, dest=None) -> list:
         raise ValueError(f"`name` must be letters, digits, '_' or '-' (a file name inside "
                          f"the destination, e.g. 'generalized_s1'); got {name!r}")
     run_dir = Path(run_dir)
-    dest = Path(dest or HERE)
-    dest.mkdir(parents=True, exist_ok=True)
+    dest = Path(dest or HERE)        # made (with its parents) by the first write into it
     ckpt = require(load(run_dir / "checkpoint.pt"),
                    ("log", "step", "config", "model", "best_model", "best_loss",
                     "model_config", "task"), run_dir / "checkpoint.pt", "export a network")

@@ -172,6 +172,8 @@ def test_bad_input_is_named():
         particle_filter(batch, 10, config=task_config("localization"))
     with pytest.raises(ValueError, match="`n_particles` must be > 0; got 0"):
         particle_filter(batch, 0)
+    with pytest.raises(ValueError, match="`threads` must be > 0; got 0"):
+        particle_filter(batch, 10, threads=0)          # not silently "every core"
 
 
 def test_a_filter_configuration_that_disagrees_with_the_batch_is_refused():

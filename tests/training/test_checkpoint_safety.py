@@ -37,13 +37,31 @@ def test_a_crafted_checkpoint_is_refused_and_its_payload_never_runs(crafted):
     assert not marker.exists()
 
 
-def test_every_loading_path_of_the_cli_refuses_it(crafted, tmp_path):
+TRAIN = ["train", "--task", "localization", "--world", "compass", "--steps", "1",
+         "--validation-trials", "2", "--no-progress"]
+
+
+@pytest.mark.parametrize("argv", [
+    ["evaluate", "PT", "--trials", "1"],
+    ["record", "--network", "PT", "--trials", "1", "--out", "TMP/rec.zarr"],
+    [*TRAIN, "--init-from", "PT", "--out", "TMP/run"],
+    [*TRAIN, "--out", "RUN"],                       # resuming the run it was put in
+    ["export-network", "RUN", "x", "--dest", "TMP/dest"],
+], ids=["evaluate", "record", "train --init-from", "train (resume)", "export-network"])
+def test_every_loading_path_of_the_cli_refuses_it(argv, crafted, tmp_path, capsys):
+    import shutil
+
     from hippo_probe.cli import main
 
     path, marker = crafted
-    assert main(["evaluate", str(path), "--trials", "1"]) != 0
-    assert main(["record", "--network", str(path), "--trials", "1",
-                 "--out", str(tmp_path / "rec.zarr")]) != 0
+    run = tmp_path / "crafted_run"
+    run.mkdir()
+    shutil.copy(path, run / "checkpoint.pt")
+    argv = [a.replace("PT", str(path)).replace("RUN", str(run)).replace("TMP", str(tmp_path))
+            for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "refused without running anything" in err and err.count("\n") == 1
     assert not marker.exists()
 
 

@@ -176,9 +176,14 @@ def test_kill_and_resume(uninterrupted, tmp_path):
     proc.wait()
     killed_at = torch.load(ckpt, weights_only=False)["step"]
     assert 3 <= killed_at < 12
+    # the 0-byte temporary torch.save leaves when killed before writing (planted, as the
+    # kill may land between writes): removed by the resumed run's first checkpoint
+    from hippo_probe import _atomic
+    (run / f".checkpoint.pt{_atomic.PARTIAL}{_atomic._HOST}-{proc.pid}-0.pt").touch()
     cfg = TrainConfig(**dict(TINY, steps=12, checkpoint_minutes=1e-9))
     log = fit(cfg, run, cache_dir=d / "cache", progress=False)
     assert log["resumed_at"][0] == killed_at
+    assert not [p.name for p in run.iterdir() if p.name.startswith(".")]
     reference = fit(cfg, tmp_path / "ref", cache_dir=d / "cache", progress=False)
     _assert_same(_params(run / "network.pt"), _params(tmp_path / "ref" / "network.pt"))
     _assert_same(_params(run / "checkpoint.pt"), _params(tmp_path / "ref" / "checkpoint.pt"))

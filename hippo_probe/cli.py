@@ -72,6 +72,24 @@ def one_of(name: str, allowed):
     return parse
 
 
+def count(low: int = 1):
+    """``type=`` of an option that counts something (trials, particles, steps): a whole
+    number >= ``low``, else argparse's one line, "argument --trials: must be a whole number
+    >= 1; got 0" (an option's own name, not the Python argument it becomes)."""
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a whole number >= {low}; "
+                                             f"got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be a whole number >= {low}; got {value}")
+        return value
+
+    parse.__name__ = "count"
+    return parse
+
+
 def check_output(flag: str, path, *, kind: str = "store", overwrite: bool = False) -> Path:
     """Refuse, before any work starts, an output path the command could not write at its
     end; the message names the command-line ``flag``.

@@ -325,12 +325,13 @@ def test_zero_particles_are_refused_not_replaced_by_the_default(option, name, tm
     out = tmp_path / "b.zarr"
     assert main(["baselines", "--task", "specialized", "--trials", "1", option, "0",
                  "--out", str(out), "--no-progress"]) == 2
-    assert f"`{name}` must be > 0; got 0" in capsys.readouterr().err
+    assert f"argument {option}: must be a whole number >= 1; got 0" in \
+        capsys.readouterr().err
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["--trials", "0"], "`--trials` must be > 0; got 0"),
+    (["--trials", "0"], "argument --trials: must be a whole number >= 1; got 0"),
     (["--out", "EXISTING"], "--out {existing} already exists; pass --overwrite"),
 ])
 def test_record_checks_its_arguments_before_working(argv, words, tmp_path, capsys):

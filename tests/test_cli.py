@@ -76,8 +76,9 @@ def test_world_stats_of_the_compass_world_have_no_drift(capsys):
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["--trials", "-1"], ["`n_trials`", "-1"]),
-    (["--trials", "0"], ["`n_trials`", "0"]),
+    (["--trials", "-1"], ["argument --trials", ">= 1", "-1"]),
+    (["--trials", "0"], ["argument --trials", ">= 1", "0"]),
+    (["--trials", "ten"], ["argument --trials", "whole number", "'ten'"]),
     (["--world", "moon"], ["`world`", "'moon'", "'darkness'"]),
     (["--split", "dev"], ["`split`", "'dev'"]),
     (["--seed", "-2"], ["`seed`", "-2"]),

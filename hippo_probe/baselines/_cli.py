@@ -1,6 +1,6 @@
 """``hippo-probe baselines``."""
 
-from ..cli import check_output, one_of
+from ..cli import check_output, count, one_of
 from ..tasks import SPLITS, TASKS
 from ..world.config import WORLDS
 
@@ -27,21 +27,21 @@ def add_commands(sub):
     p.add_argument("--plot", default=None, metavar="PNG",
                    help="also save the localization error (m) vs time of every baseline "
                         "here (default: no plot)")
-    p.add_argument("--trials", type=int, default=None, metavar="N",
+    p.add_argument("--trials", type=count(), default=None, metavar="N",
                    help="number of trials (default: the whole split)")
-    p.add_argument("--first", type=int, default=0, metavar="INDEX",
+    p.add_argument("--first", type=count(0), default=0, metavar="INDEX",
                    help="index of the first trial in the split")
-    p.add_argument("--particles", type=int, default=None, metavar="N",
+    p.add_argument("--particles", type=count(), default=None, metavar="N",
                    help=f"particles of the oracular particle filter per trial (default: "
                         f"{d.particle_filter.n_particles} with a known start, "
                         f"{d.particle_filter.unknown_start_particles} with an unknown one)")
-    p.add_argument("--slam-particles", type=int, default=None, metavar="N",
+    p.add_argument("--slam-particles", type=count(), default=None, metavar="N",
                    help=f"particles of PF-SLAM per trial, specialized task (default: "
                         f"{d.particle_filter.slam_particles})")
-    p.add_argument("--prior-trials", type=int, default=None, metavar="N",
+    p.add_argument("--prior-trials", type=count(), default=None, metavar="N",
                    help=f"training trials behind the naive-Bayes prior over positions "
                         f"(default: {d.naive_bayes.prior_trials})")
-    p.add_argument("--threads", type=int, default=None, metavar="N",
+    p.add_argument("--threads", type=count(), default=None, metavar="N",
                    help="CPU threads of the particle filters (default: all cores)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")

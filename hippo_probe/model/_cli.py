@@ -1,6 +1,6 @@
 """``hippo-probe record`` and ``hippo-probe export-network``."""
 
-from ..cli import check_output, one_of
+from ..cli import check_output, count, one_of
 from ..tasks import SPLITS, TASKS
 from ..world.config import WORLDS, MotionConfig
 
@@ -18,7 +18,7 @@ def add_commands(sub):
                    help="task whose trials to run (default: the network's own)")
     p.add_argument("--world", default=None, choices=WORLDS, type=one_of("world", WORLDS),
                    help="world of the trials (default: the network's own)")
-    p.add_argument("--trials", type=int, default=1000, metavar="N",
+    p.add_argument("--trials", type=count(), default=1000, metavar="N",
                    help=f"number of trials (each {motion.n_steps} steps of "
                         f"{motion.network_dt:g} s: {motion.n_steps * motion.network_dt:g} s)")
     p.add_argument("--seed", type=int, default=0, help="seed of the split")

@@ -1,6 +1,6 @@
 """``hippo-probe train`` and ``hippo-probe evaluate``."""
 
-from ..cli import one_of
+from ..cli import count, one_of
 from ..tasks import SPLITS, TASKS
 from ..world.config import WORLDS
 
@@ -15,21 +15,21 @@ def add_commands(sub):
     p.add_argument("--world", choices=WORLDS, type=one_of("world", WORLDS), default=d.world,
                    help="world of every trial of the run: darkness (the study's: the sensed "
                         "heading drifts) or compass (no drift)")
-    p.add_argument("--trials", type=int, default=None, metavar="N",
+    p.add_argument("--trials", type=count(), default=None, metavar="N",
                    help="training-set size, trials 0..N-1 of the train split (default: the "
                         "study's, 5,000 / 300,000 / 250,000 for localization / generalized / "
                         "specialized)")
-    p.add_argument("--steps", type=int, default=d.steps,
+    p.add_argument("--steps", type=count(), default=d.steps,
                    help="budget in optimizer (Adam) steps")
-    p.add_argument("--batch-size", type=int, default=d.batch_size,
+    p.add_argument("--batch-size", type=count(), default=d.batch_size,
                    help="trials (sequences of 500 time steps) per optimizer step")
     p.add_argument("--lr", type=float, default=d.lr,
                    help="initial Adam learning rate, cosine-decayed to --lr-final")
     p.add_argument("--lr-final", type=float, default=d.lr_final,
                    help="learning rate at the end of the budget")
-    p.add_argument("--hidden-size", type=int, default=d.hidden_size,
+    p.add_argument("--hidden-size", type=count(), default=d.hidden_size,
                    help="LSTM units (the recorded cells)")
-    p.add_argument("--validate-every", type=int, default=d.validate_every, metavar="STEPS",
+    p.add_argument("--validate-every", type=count(), default=d.validate_every, metavar="STEPS",
                    help="optimizer steps between validations (the best network by "
                         "validation loss is kept)")
     p.add_argument("--validation-trials", type=int, default=d.n_validation, metavar="N",
@@ -38,7 +38,7 @@ def add_commands(sub):
                    help="trials of the test split scored at the end")
     p.add_argument("--checkpoint-minutes", type=float, default=d.checkpoint_minutes,
                    metavar="MIN", help="wall time between checkpoints (min)")
-    p.add_argument("--threads", type=int, default=d.threads, metavar="N",
+    p.add_argument("--threads", type=count(), default=d.threads, metavar="N",
                    help="CPU threads of torch and numba in this process")
     p.add_argument("--precision", choices=("auto", *PRECISIONS), default=d.precision,
                    type=one_of("precision", ("auto", *PRECISIONS)),
@@ -82,7 +82,7 @@ def add_commands(sub):
                         "generalized)")
     e.add_argument("--split", default="test", choices=SPLITS, type=one_of("split", SPLITS),
                    help="split of the trials")
-    e.add_argument("--trials", type=int, default=1000, metavar="N", help="number of trials")
+    e.add_argument("--trials", type=count(), default=1000, metavar="N", help="number of trials")
     e.add_argument("--seed", type=int, default=0, help="seed of the split")
     e.add_argument("--task", default=None, choices=TASKS, type=one_of("task", TASKS),
                    help="task whose trials to run (default: the network's own)")

@@ -1,13 +1,13 @@
 """``hippo-probe world-stats``."""
 
-from ..cli import one_of
+from ..cli import count, one_of
 from ..tasks import SPLITS
 from .config import WORLDS
 
 
 def add_commands(sub):
     p = sub.add_parser("world-stats", help="statistics of each task's trials, and a picture")
-    p.add_argument("--trials", type=int, default=500, metavar="N",
+    p.add_argument("--trials", type=count(), default=500, metavar="N",
                    help="trials per task")
     p.add_argument("--world", default="darkness", choices=WORLDS, type=one_of("world", WORLDS),
                    help="the world: darkness (the study's: the sensed heading drifts) or "

@@ -309,7 +309,8 @@ def test_evaluate_refuses_no_trials_and_a_broken_network(uninterrupted, tmp_path
     d, _ = uninterrupted
     pt, _ = export_network(d / "run", "tiny_eval", dest=tmp_path)
     assert main(["evaluate", str(pt), "--trials", "0"]) == 2
-    assert "`--trials` must be >= 1; got 0" in capsys.readouterr().err
+    assert "argument --trials: must be a whole number >= 1; got 0" in \
+        capsys.readouterr().err
     obj = torch.load(pt, weights_only=True)
     obj["model"] = {k: torch.full_like(v, float("nan")) for k, v in obj["model"].items()}
     save_atomic(obj, tmp_path / "nan.pt")         # a NaN network, intact as a file

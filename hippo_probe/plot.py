@@ -342,9 +342,11 @@ def hd_polar(tuning, *, units=None, group=None, max_cols=6, panel=1.8, fig=None,
     Each panel is titled with its unit, the unit's ``region`` when the result has one,
     the mean vector length R and the preferred direction in degrees (0-360,
     counter-clockwise from +x, the convention of the polar axes, whose ticks are in
-    degrees too). The radius starts at 0: for signed activity (LSTM h) the curve is drawn
-    minus the ``rate_offset`` that R was computed without (the unit's minimum), so a
-    weakly tuned unit is a nearly round curve, as its small R says.
+    degrees too). Given the whole result of :func:`~hippo_probe.head_direction_tuning`,
+    a curve with a non-zero ``rate_offset`` (signed activity such as LSTM h: the unit's
+    minimum, which R was computed without) is drawn minus that offset, radius from 0, so a
+    weakly tuned unit is a nearly round curve, as its small R says; a bare
+    ``tuning_curve`` is drawn as it is.
 
     Parameters
     ----------

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
-import os
 import functools
+import json
+import os
+import uuid
 import warnings
 from pathlib import Path
 
@@ -121,7 +123,10 @@ def _write(rec, store, config, storage_options=None):
                          encoding=_encoding(prepared, time_chunk, config))
     group = zarr.open_group(store, mode="r+", storage_options=storage_options)
     nchunks = {name: int(array.nchunks) for name, array in group.arrays()}
-    group.attrs[COMPLETE_MARKER] = {"complete": True, "nchunks": nchunks}
+    # store_id: which save this is, so that a lazy reader can tell the store it opened
+    # from one saved over it later (StoreGuard)
+    group.attrs[COMPLETE_MARKER] = {"complete": True, "nchunks": nchunks,
+                                    "store_id": uuid.uuid4().hex}
 
 
 def save_recording(rec, path, overwrite=False, *, config=DEFAULTS, storage_options=None):
@@ -239,10 +244,13 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     (``save_recording(..., overwrite=True)``) or removed after it was opened, a read
     raises :class:`~hippo_probe.errors.RecordingError` instead of returning the new
     store's data (or zarr's fill value for chunks that are gone): re-open it, or
-    ``.load()`` what must stay fixed. The check compares the identity of the store's
-    ``zarr.json`` (device, inode, modification time) at each chunk read with the one seen
-    at opening; it is made for local stores read through dask (not for URLs, nor with
-    ``chunks=None``).
+    ``.load()`` what must stay fixed. Metadata rewritten in place (an attribute set,
+    consolidated metadata, a touched file) is the same store and reads on
+    (:class:`StoreGuard`: a stat per chunk, and the store id of the completion marker when
+    the stat changed). Made for local stores read through dask (not for URLs, nor with
+    ``chunks=None``); stores saved before store ids existed count any change of their
+    metadata as a replacement; a network file system may show another client's
+    replacement only after its attribute cache expires.
 
     Parameters
     ----------
@@ -279,14 +287,14 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
             raise FileNotFoundError(f"`path` does not exist: {local}{hint}")
         path = str(local)
     _check_complete(path, storage_options)
-    opened = None if _is_url(path) else _identity(path)
+    guard = None if _is_url(path) else StoreGuard(path)
     storage = {} if chunks == "trials" else chunks
     try:
-        rec = _open(path, storage, storage_options, opened)
+        rec = _open(path, storage, storage_options, guard)
         if chunks == "trials":
             aligned = _trial_chunks(rec, config)
             if aligned is not None:
-                rec = _open(path, {"time": aligned}, storage_options, opened)
+                rec = _open(path, {"time": aligned}, storage_options, guard)
     except RecordingError:
         raise
     except Exception as err:
@@ -295,34 +303,70 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     return validate(rec)
 
 
-def _identity(path):
-    """(device, inode, mtime) of a local store's ``zarr.json``; None if it is gone. A store
-    written anew (an overwrite is a new directory renamed into place) has another one."""
+def _signature(path):
+    """Cheap stat signature of a local store: the inode of its folder and the inode and
+    modification time of its ``zarr.json``; None if either is gone."""
     try:
-        st = os.stat(os.path.join(path, "zarr.json"))
+        folder, meta = os.stat(path), os.stat(os.path.join(path, "zarr.json"))
     except OSError:
         return None
-    return st.st_dev, st.st_ino, st.st_mtime_ns
+    return folder.st_ino, meta.st_ino, meta.st_mtime_ns
 
 
-def _check_same_store(path, opened):
-    if opened is not None and _identity(path) != opened:
-        raise RecordingError(f"`path` {os.fspath(path)} was replaced or removed after this "
+def _store_id(path):
+    """The ``store_id`` of a local store's completion marker (None: gone, unreadable, or
+    saved before store ids existed)."""
+    try:
+        with open(os.path.join(path, "zarr.json"), "rb") as f:
+            attrs = json.load(f).get("attributes") or {}
+    except (OSError, ValueError):
+        return None
+    marker = attrs.get(COMPLETE_MARKER)
+    return marker.get("store_id") if isinstance(marker, dict) else None
+
+
+class StoreGuard:
+    """Refuses reads of a lazily opened local store once another store was saved over it
+    (or it was removed).
+
+    Each chunk read first compares a stat signature (:func:`_signature`); only when it
+    changed is the ``store_id`` that :func:`save_recording` writes into the completion
+    marker read again: the same id is the same store whose metadata was rewritten (an
+    attribute set in place, consolidated metadata, a touched file), and reading goes on;
+    another id, or none, is another store. Picklable, so dask's distributed workers carry
+    it (the signature holds no device number, which differs between hosts).
+    """
+
+    def __init__(self, path):
+        self.path = os.path.abspath(path)      # an os.chdir later must not matter
+        self.signature = _signature(self.path)
+        self.store_id = _store_id(self.path)
+
+    def check(self):
+        now = _signature(self.path)
+        if now == self.signature:
+            return
+        if now is not None and self.store_id is not None \
+                and _store_id(self.path) == self.store_id:
+            self.signature = now                 # the same store, metadata rewritten
+            return
+        raise RecordingError(f"`path` {self.path} was replaced or removed after this "
                              f"recording was opened; its data now would come from another "
                              f"store (or be missing): open it again (or .load() a recording "
                              f"that must outlive an overwrite)")
 
 
-def _read_chunk(path, opened, array, index, *args, **kwargs):
+def _read_chunk(path, guard, array, index, *args, **kwargs):
     """dask's getter, with a failure (a chunk that fails its CRC32C checksum, a chunk file
     gone since opening) raised as a RecordingError naming the variable and the store, and
-    a read from a store replaced or removed since opening refused (``opened``: its
-    :func:`_identity` then). The identity is checked after the read: a store replaced
-    during it is caught, and an overwrite never brings the opened store back."""
+    a read from a store replaced or removed since opening refused (``guard``, a
+    :class:`StoreGuard`, or None for URLs). The guard checks after the read: a store
+    replaced during it is caught, and an overwrite never brings the opened store back."""
     try:
         block = dask_getter(array, index, *args, **kwargs)
     except Exception as err:
-        _check_same_store(path, opened)
+        if guard is not None:
+            guard.check()
         inner = array
         while getattr(inner, "array", None) is not None or getattr(inner, "_array", None) \
                 is not None:
@@ -331,7 +375,8 @@ def _read_chunk(path, opened, array, index, *args, **kwargs):
         raise RecordingError(f"`{name}` of the store {os.fspath(path)} could not be read at "
                              f"{_slices(index)}: {type(err).__name__}: {err} (a damaged "
                              f"chunk; re-copy or re-save the recording)") from err
-    _check_same_store(path, opened)
+    if guard is not None:
+        guard.check()
     return block
 
 
@@ -341,8 +386,8 @@ def _slices(index) -> str:
     return "[" + ", ".join(parts) + "]"
 
 
-def _open(path, chunks, storage_options, opened=None):
-    getitem = functools.partial(_read_chunk, path, opened)
+def _open(path, chunks, storage_options, guard=None):
+    getitem = functools.partial(_read_chunk, path, guard)
     with warnings.catch_warnings():
         # trial-aligned dask chunks may cut stored chunks; intended (see open_recording)
         warnings.filterwarnings("ignore", message="The specified chunks separate")

@@ -32,9 +32,9 @@ def add_commands(sub):
     p.add_argument("--validate-every", type=count(), default=d.validate_every, metavar="STEPS",
                    help="optimizer steps between validations (the best network by "
                         "validation loss is kept)")
-    p.add_argument("--validation-trials", type=int, default=d.n_validation, metavar="N",
+    p.add_argument("--validation-trials", type=count(), default=d.n_validation, metavar="N",
                    help="trials of the validation split used at each validation")
-    p.add_argument("--test-trials", type=int, default=d.n_test, metavar="N",
+    p.add_argument("--test-trials", type=count(), default=d.n_test, metavar="N",
                    help="trials of the test split scored at the end")
     p.add_argument("--checkpoint-minutes", type=float, default=d.checkpoint_minutes,
                    metavar="MIN", help="wall time between checkpoints (min)")

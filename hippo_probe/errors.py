@@ -16,3 +16,7 @@ class RecordingError(HippoProbeError):
 
 class CheckpointError(HippoProbeError):
     """A checkpoint file is missing, corrupt, or from an incompatible configuration."""
+
+
+class RunInUseError(HippoProbeError):
+    """A training run's folder is being trained in by another process."""

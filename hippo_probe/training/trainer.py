@@ -10,6 +10,7 @@ The squared error is averaged over the two coordinates. ``lambda`` is fixed for 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import math
@@ -26,6 +27,7 @@ from tqdm.auto import tqdm
 
 from .._atomic import write_text
 from .._version import __version__
+from ..errors import RunInUseError
 from ..model.config import ModelConfig, input_scale_for, native_bf16, resolve_precision
 from ..model.navigator import Navigator
 from ..tasks import make_trials, task_config
@@ -278,10 +280,43 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
     except Exception:  # numba threading layer not initialisable: serial is fine
         pass
     reuse_freed_memory()    # each step's activations, reused instead of page-faulted anew
+    run_dir = Path(run_dir)
     try:
-        return _fit(config, Path(run_dir), rank, world_size, progress, cache_dir, stop_after)
+        with _sole_trainer(run_dir) if rank == 0 else contextlib.nullcontext():
+            return _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after)
     finally:
         torch.set_num_threads(threads_before)   # don't leave a Jupyter kernel pinned
+
+
+@contextlib.contextmanager
+def _sole_trainer(run_dir: Path):
+    """Hold an exclusive lock on ``run_dir`` while training in it: a second process
+    started on the same run (the same command twice) would checkpoint over the first one's
+    progress, so it is refused. The kernel drops the lock when its holder dies (kill -9
+    included), so no stale lock survives a crash."""
+    try:
+        import fcntl
+    except ImportError:         # not POSIX: no lock, as before
+        yield
+        return
+    run_dir.mkdir(parents=True, exist_ok=True)
+    with open(run_dir / ".lock", "a+") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            handle.seek(0)
+            holder = handle.read().strip() or "?"
+            raise RunInUseError(f"`run_dir` {str(run_dir)!r} is being trained by another "
+                               f"process (pid {holder}); wait for it, or stop it and resume "
+                               f"with the same command") from None
+        handle.seek(0)
+        handle.truncate()
+        handle.write(str(os.getpid()))
+        handle.flush()
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):

@@ -371,3 +371,24 @@ def test_a_stopped_run_resumed_stops_again_or_trains_on_without_its_old_verdict(
     # the cap lifted: it trains to its budget and no longer says it stopped
     done = fit(TrainConfig(**TINY), run, cache_dir=cache, progress=False)
     assert "stopped" not in done and len(done["train"]) == 6 and "test" in done
+
+
+def test_a_run_being_trained_by_another_process_is_refused(tmp_path):
+    """The same command started twice would checkpoint over the first one's progress."""
+    import fcntl
+
+    from hippo_probe.errors import RunInUseError
+    run = tmp_path / "run"
+    run.mkdir()
+    with open(run / ".lock", "a+") as held:        # another trainer's lock
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        held.write("4242")
+        held.flush()
+        with pytest.raises(RunInUseError, match=r"being trained by another process "
+                                                r"\(pid 4242\)"):
+            fit(TrainConfig(**TINY), run, cache_dir=tmp_path / "cache", progress=False)
+        assert not (run / "checkpoint.pt").exists()
+    # released (as by the holder's death), the run trains
+    fit(TrainConfig(**{**TINY, "steps": 1}), run, cache_dir=tmp_path / "cache",
+        progress=False)
+    assert (run / "checkpoint.pt").exists()

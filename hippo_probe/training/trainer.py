@@ -306,9 +306,9 @@ def _sole_trainer(run_dir: Path):
         except BlockingIOError:
             handle.seek(0)
             holder = handle.read().strip() or "?"
-            raise RunInUseError(f"`run_dir` {str(run_dir)!r} is being trained by another "
-                               f"process (pid {holder}); wait for it, or stop it and resume "
-                               f"with the same command") from None
+            raise RunInUseError(f"the run folder {str(run_dir)!r} is being trained by "
+                                f"another process (pid {holder}); wait for it, or stop it "
+                                f"and resume with the same command") from None
         handle.seek(0)
         handle.truncate()
         handle.write(str(os.getpid()))

@@ -1,14 +1,14 @@
 """Does training in bf16 converge as well as in float32? Validation curves side by side.
 
 The same 1,000-step run of the generalized task in the darkness world (seed 0, init seed
-0) in fp32 and in bf16, and, as the yardstick of run-to-run variation, the fp32 run with
+0) in fp32 and in bf16, and, as the yardstick of run-to-run variation, both again with
 another init seed (1): bf16 converges as well if its gap to fp32 is no larger than the gap
-between two fp32 seeds. Reads the runs' ``log.json`` (copies in
+between two seeds of one precision. Reads the runs' ``log.json`` (copies in
 ``analyses/data/precision_convergence/``) and writes a figure.
 
     hippo-probe train --task generalized --steps 1000 --precision fp32 --validate-every 100 \\
         --validation-trials 500 --test-trials 200 --threads 1 --out runs/convergence/fp32
-    (the same with --precision bf16, and with --init-seed 1 --out runs/convergence/fp32_seed1)
+    (the same with --precision bf16, and both with --init-seed 1 --out runs/convergence/*_seed1)
     python analyses/precision_convergence.py [--runs analyses/data/precision_convergence]
 """
 
@@ -26,7 +26,7 @@ from hippo_probe._atomic import save_figure  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RUNS = {"fp32": "fp32, init seed 0", "bf16": "bf16, init seed 0",
-        "fp32_seed1": "fp32, init seed 1"}
+        "fp32_seed1": "fp32, init seed 1", "bf16_seed1": "bf16, init seed 1"}
 
 
 def main():

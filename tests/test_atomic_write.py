@@ -101,6 +101,8 @@ ALLOWED = {
     ("recording/store.py", "_write"): "called inside save_recording's atomic_path (or on "
                                       "a URL, where object stores have no rename)",
     ("tasks.py", "_discard"): "renames a damaged cache block aside to delete it",
+    ("training/trainer.py", "_sole_trainer"): "a lock file (flock) holding the trainer's "
+                                              "pid, not data: never read back as results",
 }
 
 

@@ -293,7 +293,9 @@ def _sole_trainer(run_dir: Path):
     """Hold an exclusive lock on ``run_dir`` while training in it: a second process
     started on the same run (the same command twice) would checkpoint over the first one's
     progress, so it is refused. The kernel drops the lock when its holder dies (kill -9
-    included), so no stale lock survives a crash."""
+    included), so no stale lock survives a crash. The file ``.lock`` stays in the folder:
+    removing it on release would let a late opener lock an unlinked file while a new
+    trainer locks a new one."""
     try:
         import fcntl
     except ImportError:         # not POSIX: no lock, as before

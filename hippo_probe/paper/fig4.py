@@ -86,6 +86,9 @@ def _maps_panel(sub, rec, title, numbers, key):
                        ylabel="cumulative fraction of units",
                        title="stability across all units")
     ax.tick_params(labelsize=7)
+    ax.xaxis.label.set_fontsize(8)
+    ax.yaxis.label.set_fontsize(8)
+    ax.legend(frameon=False, fontsize=8)
     sub.suptitle(f"{title} (the {N_EXAMPLES} most spatially selective units)", fontsize=10,
                  x=0.02, ha="left")
     numbers[key] = {"stability_same_arena_median": float(np.nanmedian(same)),

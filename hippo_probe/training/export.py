@@ -14,6 +14,20 @@ from .checkpoint import load, require, save_atomic
 #: Names a shipped network may have: a plain file name, never a path or a hidden file.
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
 
+#: At most this many per-step entries go into a shipped training log (a 40,000-step run
+#: would otherwise ship 7 MB of JSON); the run's checkpoint keeps every step.
+MAX_TRAIN_ENTRIES = 4000
+
+
+def _thin(train: list) -> tuple[list, int]:
+    """Every k-th step of the training log (the first and last always kept), and k."""
+    # with the last step appended, ceil((n - 1) / (MAX - 1)) keeps the count within MAX
+    every = max(1, -(-(len(train) - 1) // (MAX_TRAIN_ENTRIES - 1)))
+    kept = train[::every]
+    if train and kept[-1] is not train[-1]:
+        kept.append(train[-1])
+    return kept, every
+
 
 def _jsonable(obj):
     if isinstance(obj, dict):
@@ -27,7 +41,9 @@ def _jsonable(obj):
 
 def export_network(run_dir, name: str, dest=None) -> list:
     """Write ``<dest>/<name>.pt`` (best parameters so far, architecture, task, test
-    metrics if the run finished) and ``<dest>/<name>.log.json`` (the training log).
+    metrics if the run finished) and ``<dest>/<name>.log.json`` (the training log; its
+    per-step entries thinned to every ``train_every``-th step, at most
+    :data:`MAX_TRAIN_ENTRIES`, with the first and last kept).
 
     Works on a finished run (``network.pt``) or on a run in progress (its last
     checkpoint's best parameters); the log says which (``finished``, ``steps_done``).
@@ -56,6 +72,7 @@ def export_network(run_dir, name: str, dest=None) -> list:
     save_atomic(network, pt)
     log.update(steps_done=ckpt["step"], finished=finished,
                best_validation_loss=ckpt["best_loss"])
+    log["train"], log["train_every"] = _thin(log.get("train", []))
     if isinstance(log.get("command"), str):       # logs written before _command_line
         program, *rest = log["command"].split(" ")
         log["command"] = " ".join([Path(program).name, *rest])

@@ -232,6 +232,16 @@ def test_export_and_readout_retraining(uninterrupted, tmp_path):
     assert log["base_network"]["init_from"] == str(pt)
 
 
+@pytest.mark.parametrize("steps,every", [(6, 1), (4000, 1), (4001, 2), (40_000, 11)])
+def test_a_shipped_training_log_is_thinned_keeping_first_and_last(monkeypatch, steps, every):
+    from hippo_probe.training import export
+    train = [{"step": s} for s in range(1, steps + 1)]
+    kept, k = export._thin(train)
+    assert k == every and len(kept) <= export.MAX_TRAIN_ENTRIES
+    assert kept[0]["step"] == 1 and kept[-1]["step"] == steps
+    assert all(b["step"] - a["step"] <= every for a, b in zip(kept, kept[1:]))
+
+
 def test_readout_retraining_needs_the_specialized_task():
     with pytest.raises(ValueError, match="specialized task"):
         TrainConfig(task="generalized", train_only="classifier", init_from="x")

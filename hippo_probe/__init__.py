@@ -34,6 +34,7 @@ _LAZY_ATTRS = {
     "from_nwb": "hippo_probe.recording",
     "to_nwb": "hippo_probe.recording",
     "select_trials": "hippo_probe.recording",
+    "poisson_spikes": "hippo_probe.recording",
     # pynapple bridge (issue 16; pynapple is imported when called)
     "to_pynapple": "hippo_probe.recording",
     "from_pynapple": "hippo_probe.recording",

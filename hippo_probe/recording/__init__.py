@@ -12,12 +12,13 @@ from .nwb import from_nwb, to_nwb
 from .pynapple_bridge import from_pynapple, to_pynapple
 from .schema import SCHEMA_VERSION, VARIABLES, annotate, attrs_for
 from .select import select_trials
+from .spikes import poisson_spikes
 from .store import open_recording, save_recording
 from .validate import validate
 
 __all__ = [
     "DEFAULTS", "RecordingConfig", "SCHEMA_VERSION", "VARIABLES", "annotate", "attrs_for",
     "bin_spikes", "from_arrays", "from_nwb", "from_pynapple", "open_recording",
-    "save_recording", "select_trials", "stack_trials", "to_nwb", "to_pynapple",
-    "trial_aligned_chunks", "trial_blocks", "trial_layout", "validate",
+    "poisson_spikes", "save_recording", "select_trials", "stack_trials", "to_nwb",
+    "to_pynapple", "trial_aligned_chunks", "trial_blocks", "trial_layout", "validate",
 ]

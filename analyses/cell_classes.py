@@ -7,7 +7,14 @@ environment, as in an open-field session), on ``--trials`` test trials; the mous
 is tests/data/A2929-200711.nwb (ADn head-direction cells and CA1 cells), imported with
 ``hippo_probe.from_nwb``. ``hippo_probe.classify_cells`` gives every unit's grid, border,
 place, head-direction, speed and conjunctive scores against time-shift shuffles; the
-figure shows the fraction of units in each class, side by side. It also times
+figure shows the fraction of units in each class, side by side.
+
+The networks' units are noise-free: with ~100,000 samples any tuning at all beats the
+shuffles, so on their activity as recorded almost every unit passes almost every test.
+Each network is therefore also classified as spikes (``hippo_probe.poisson_spikes``: each
+unit's activity, minus its minimum, as a Poisson rate whose mean is the mouse session's
+median firing rate) over the mouse session's duration (its first whole trials covering
+it): the same counting noise, and the same power, as the mouse's cells. It also times
 ``classify_cells`` on one network's 256 units beside opexebo's grid and border scores on
 the same rate maps (opexebo has no shuffles: its time is for the observed maps only).
 
@@ -109,6 +116,10 @@ def opexebo_scores(maps, n_units):
     return seconds, np.array(grid, float), np.array(border, float)
 
 
+def _range(pair):
+    return "n/a" if pair is None else f"{pair[0]:.2f} to {pair[1]:.2f}"
+
+
 def timing(rec, t_classify, n_shuffles, opexebo_units):
     """Seconds for classify_cells (``t_classify``: all scores, with shuffles), for our grid
     + border scores on the observed maps, and for opexebo's on the same maps."""
@@ -136,22 +147,23 @@ def timing(rec, t_classify, n_shuffles, opexebo_units):
                                                                  op_g[ok])[0, 1])
         if ok.sum() > 2 else None,
         "grid_scores_compared": int(ok.sum()),
+        "grid_scores_ours_range": [float(ours_g[:n_units][ok].min()),
+                                   float(ours_g[:n_units][ok].max())] if ok.any() else None,
+        "grid_scores_opexebo_range": [float(op_g[ok].min()), float(op_g[ok].max())]
+        if ok.any() else None,
     }
 
 
-def figure(groups, time_info, out, subtitle=""):
-    """Bars of class fractions (the mouse by region) and of the timings."""
-    bars_of = {}
-    for name, g in groups.items():
-        if "by_region" in g:
-            for region, f in g["by_region"].items():
-                bars_of[f"{name} {REGIONS.get(region, region)}"] = f
-        else:
-            bars_of[name] = g["fractions"]
+def _label(name, group):
+    """A network's bar label: its name, with its world where the name does not say it."""
+    world = group.get("world")
+    return name if not world or world in name else f"{name} ({world})"
+
+
+def _class_bars(ax, bars_of, title):
+    """Grouped bars: one group per class, one bar per recording (``bars_of``)."""
     labels = list(bars_of)
     classes = (*CLASSES, "unclassified")
-    fig, (ax, ax_t) = plt.subplots(1, 2, figsize=(14, 4.2), constrained_layout=True,
-                                   gridspec_kw={"width_ratios": [3, 1]})
     width = 0.8 / len(labels)
     colors = plt.get_cmap("tab10")
     for k, name in enumerate(labels):
@@ -161,9 +173,34 @@ def figure(groups, time_info, out, subtitle=""):
                label=f"{name} (n={f['n_units']})")
     ax.set_xticks(np.arange(len(classes)), [c.replace("_", "\n") for c in classes])
     ax.set_ylabel("fraction of units")
-    ax.set_ylim(0, 1)
-    ax.legend(fontsize=8, loc="upper left")
-    ax.set_title("cell classes (a unit may be in several; thresholds from each unit's "
+    ax.set_ylim(0, 1.3)
+    ax.set_yticks(np.linspace(0, 1, 6))
+    ax.legend(fontsize=7, loc="upper center", ncols=3)      # above the bars (y > 1)
+    ax.set_title(title, fontsize=10)
+
+
+def figure(groups, time_info, out, subtitle="", spike_rate=None, mouse_s=None):
+    """Bars of class fractions, networks as recorded and as spikes (the mouse, by region,
+    in both), and of the timings."""
+    mouse, recorded, spiking = {}, {}, {}
+    for name, g in groups.items():
+        if "by_region" in g:
+            for region, f in g["by_region"].items():
+                mouse[f"{name} {REGIONS.get(region, region)}"] = f
+        elif g.get("spikes"):
+            spiking[_label(name.removesuffix(" spikes"), g)] = g["fractions"]
+        else:
+            recorded[_label(name, g)] = g["fractions"]
+    panels = [(recorded, "networks' activity as recorded (noise-free)")]
+    if spiking:
+        panels.append((spiking, (f"networks as Poisson spikes at {spike_rate:.2g} Hz "
+                                  f"(the mouse's median rate), over the mouse's {mouse_s:.0f} s")))
+    fig = plt.figure(figsize=(13, 4.2 * len(panels)), layout="constrained")
+    grid = fig.add_gridspec(len(panels), 2, width_ratios=[3, 1])
+    for row, (bars, title) in enumerate(panels):
+        _class_bars(fig.add_subplot(grid[row, 0]), {**bars, **mouse}, title)
+    ax_t = fig.add_subplot(grid[:, 1])
+    fig.suptitle("cell classes (a unit may be in several; thresholds from each unit's "
                  f"time-shift shuffles){subtitle}", fontsize=10)
     if time_info:
         bars = {f"classify_cells\n(all scores,\n{time_info['n_shuffles']} shuffles)":
@@ -201,6 +238,12 @@ def main():
     names = a.networks or shipped_networks()
     out = Path(a.out)
     groups, tables, time_info = {}, {}, None
+    mouse = hp.from_nwb(SESSION, epoch="wake")
+    # the mouse's units' median rate, in Hz (counts per sample / dt)
+    spike_rate = float(np.median(mouse.activity.values.mean(axis=0)) / mouse.attrs["dt"])
+    mouse_s = float(mouse.sizes["time"] * mouse.attrs["dt"])
+    print(f"mouse: {mouse.sizes['unit']} units over {mouse_s:.0f} s, median rate "
+          f"{spike_rate:.2f} Hz")
     for name in names:
         t0 = time.perf_counter()
         rec = record_network(name, a.trials)
@@ -219,8 +262,25 @@ def main():
         if time_info is None and not a.no_timing and rec.sizes["unit"] >= 256:
             time_info = dict(timing(rec, t_cls, a.shuffles, a.opexebo_units), network=name)
             print(f"timing ({name}): {time_info}")
+        # as spikes, over the mouse session's duration (its first whole trials covering
+        # it): the same rate and duration give the same counts, so the same power
+        trial_s = np.diff(rec.trial_start.values[:2])[0] if rec.sizes["trial_id"] > 1 \
+            else rec.sizes["time"] * rec.attrs["dt"]
+        n_first = int(np.ceil(mouse_s / trial_s))
+        spikes = hp.poisson_spikes(
+            hp.select_trials(rec, trials=rec.trial_id.values[:n_first]),
+            mean_rate=spike_rate, seed=SEED)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", AnalysisWarning)
+            table = hp.classify_cells(spikes, n_shuffles=a.shuffles, seed=SEED)
+        tables[f"{name} spikes"] = table
+        groups[f"{name} spikes"] = {"fractions": fractions(table), "spikes": True,
+                                    "mean_rate_hz": spike_rate, "trials": n_first,
+                                    "world": groups[name]["world"],
+                                    "seconds": float(spikes.sizes["time"] * rec.attrs["dt"])}
+        print(f"{name} as spikes at {spike_rate:.2f} Hz: "
+              f"{groups[f'{name} spikes']['fractions']}")
 
-    mouse = hp.from_nwb(SESSION, epoch="wake")
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AnalysisWarning)
@@ -238,8 +298,8 @@ def main():
     print(f"mouse: {groups['mouse A2929']['fractions']}; by region "
           f"{groups['mouse A2929']['by_region']}")
 
-    figure(groups, time_info, out,
-           subtitle=f"\n{a.trials} trials per network, {a.shuffles} shuffles")
+    figure(groups, time_info, out, spike_rate=spike_rate, mouse_s=mouse_s,
+           subtitle=f"; {a.trials} trials per network, {a.shuffles} shuffles")
     lines = ["| recording | units | " + " | ".join(CLASSES) + " | unclassified |",
              "|---" * (len(CLASSES) + 3) + "|"]
     for name, g in groups.items():
@@ -254,10 +314,25 @@ def main():
                   f"observed maps {time_info['ours_grid_border_observed_s']:.2f} s; "
                   f"opexebo's on the same maps "
                   f"{time_info['opexebo_grid_border_observed_per_256_units_s']:.1f} s "
-                  f"(timed on {time_info['opexebo_units_timed']} units).")]
+                  f"(timed on {time_info['opexebo_units_timed']} units). Grid scores beside "
+                  f"opexebo's on these maps: r = "
+                  f"{time_info['grid_score_correlation_with_opexebo']:.2f} over the "
+                  f"{time_info['grid_scores_compared']} maps both score (ours "
+                  f"{_range(time_info['grid_scores_ours_range'])}, opexebo's "
+                  f"{_range(time_info['grid_scores_opexebo_range'])}; ours is NaN for "
+                  "maps whose central peak is wider than half the largest annulus). These "
+                  "maps have no hexagonal autocorrelogram, and on such maps the score "
+                  "depends on the annulus each rule picks (the central-radius convention, "
+                  "tests/analysis/test_grid_score.py); on grid-like maps the two agree "
+                  "(r > 0.95, the same maps above 0.5)."),
+                  "", (f"'spikes': the network's units as Poisson spikes at {spike_rate:.2f} Hz "
+                       "(hp.poisson_spikes), the mouse's median rate, on the first whole trials "
+                       f"covering the mouse session's {mouse_s:.0f} s; as recorded: "
+                       f"{a.trials} trials.")]
     write_text(out / "cell_classes.md", "\n".join(lines) + "\n", what="class table")
     write_text(out / "cell_classes.json", json.dumps(jsonable({
         "trials": a.trials, "n_shuffles": a.shuffles, "seed": SEED,
+        "spike_rate_hz": spike_rate,
         "hippo_probe": hp.__version__, "groups": groups, "timing": time_info,
         "rules": tables[names[0]].attrs["rules"] if names else None}), indent=1))
     print(f"wrote {out}/cell_classes.png/.pdf/.md/.json")

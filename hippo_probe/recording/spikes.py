@@ -29,10 +29,17 @@ def poisson_spikes(rec, mean_rate, seed=0):
         n_u(t) \sim \mathrm{Poisson}(r_u(t)\,\delta t),
 
     with :math:`m_u` the unit's minimum (0 for a rate) and :math:`\delta t` the sample
-    interval (``attrs['dt']``). A unit whose activity is constant has rate 0 (no spikes).
-    The shape of each unit's tuning is kept; only its scale is set, so ``mean_rate`` is a
-    statement about the cells being compared with (e.g. the median rate of a real
-    session's units), not a free knob of the tuning.
+    interval (``attrs['dt']``). A signed unit whose activity is constant has rate 0 (no
+    spikes); a constant positive rate fires steadily at ``mean_rate``; a rate unit that is
+    0 throughout stays silent. The shape of each unit's tuning is kept; only its scale is
+    set, so ``mean_rate`` is a statement about the cells being compared with (e.g. the
+    median rate of a real session's units), not a free knob of the tuning.
+
+    :math:`m_u` and the mean are taken over the recording passed: spikes drawn from a
+    subset of trials (``select_trials`` first) are scaled to that subset, and differ from
+    the same trials cut out of spikes drawn over the whole recording. On a dask-backed
+    recording both reductions run at once, in one streaming pass, when this is called;
+    the draws themselves stay lazy.
 
     Parameters
     ----------
@@ -71,9 +78,7 @@ def poisson_spikes(rec, mean_rate, seed=0):
     >>> round(float(spikes.activity.sum()) / 100.0)      # 100 s at 5 Hz
     5
     """
-    mean_rate = check_number("mean_rate", mean_rate, low=0)
-    if not np.isfinite(mean_rate):
-        raise ValueError(f"`mean_rate` must be a finite rate in Hz; got {mean_rate!r}")
+    mean_rate = check_number("mean_rate", mean_rate, low=0)     # > 0 and finite
     seed = check_nonnegative_int("seed", seed)
     kind = rec.attrs.get("activity_kind")
     if kind == "spike_count":
@@ -87,7 +92,9 @@ def poisson_spikes(rec, mean_rate, seed=0):
     act = rec["activity"]
     floor = act.min("time") if kind in CONVENTIONS.signed_kinds else xr.zeros_like(
         act.isel(time=0, drop=True))
-    mean = (act - floor).mean("time")
+    # mean(a - m) = mean(a) - m: both reductions stream over the chunks together (taking
+    # the mean of a - m would hold every chunk until the minimum is known)
+    mean = act.mean("time") - floor
     floor, mean = xr.align(*_computed(floor, mean))
     # rate per sample, r dt; a constant unit (mean 0) gets 0, not NaN
     scale = xr.where(mean > 0, mean_rate * dt / mean.where(mean > 0, 1.0), 0.0)

@@ -42,6 +42,8 @@ def test_a_rate_is_used_as_it_is_and_the_draw_is_seeded():
     spikes = poisson_spikes(rec, mean_rate=4.0, seed=3)
     assert spikes.activity.values[off, 1].sum() == 0       # rate 0 when off: no shift
     assert spikes.activity.values[~off, 1].mean() / DT == pytest.approx(8.0, rel=0.05)
+    # a constant positive rate is not shifted to 0: it fires steadily at the mean rate
+    assert spikes.activity.values[:, 2].sum() / (N * DT) == pytest.approx(4.0, abs=0.2)
     again = poisson_spikes(rec, mean_rate=4.0, seed=3)
     other = poisson_spikes(rec, mean_rate=4.0, seed=4)
     assert np.array_equal(spikes.activity.values, again.activity.values)

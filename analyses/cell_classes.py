@@ -13,8 +13,10 @@ The networks' units are noise-free: with ~100,000 samples any tuning at all beat
 shuffles, so on their activity as recorded almost every unit passes almost every test.
 Each network is therefore also classified as spikes (``hippo_probe.poisson_spikes``: each
 unit's activity, minus its minimum, as a Poisson rate whose mean is the mouse session's
-median firing rate) over the mouse session's duration (its first whole trials covering
-it): the same counting noise, and the same power, as the mouse's cells. It also times
+median firing rate) over the first whole trials that cover the mouse session's duration
+(600 s of trials for its 530 s): about the same counting noise and power as the mouse's
+cells. Every network unit gets the median rate, while the mouse's units range from 0.2
+to 20 Hz. It also times
 ``classify_cells`` on one network's 256 units beside opexebo's grid and border scores on
 the same rate maps (opexebo has no shuffles: its time is for the observed maps only).
 
@@ -192,9 +194,11 @@ def figure(groups, time_info, out, subtitle="", spike_rate=None, mouse_s=None):
         else:
             recorded[_label(name, g)] = g["fractions"]
     panels = [(recorded, "networks' activity as recorded (noise-free)")]
+    n_seconds = max((g["seconds"] for g in groups.values() if g.get("spikes")), default=0)
     if spiking:
         panels.append((spiking, (f"networks as Poisson spikes at {spike_rate:.2g} Hz "
-                                  f"(the mouse's median rate), over the mouse's {mouse_s:.0f} s")))
+                                  f"(the mouse's median rate), "
+                                  f"{n_seconds:.0f} s (the mouse: {mouse_s:.0f} s)")))
     fig = plt.figure(figsize=(13, 4.2 * len(panels)), layout="constrained")
     grid = fig.add_gridspec(len(panels), 2, width_ratios=[3, 1])
     for row, (bars, title) in enumerate(panels):
@@ -327,7 +331,9 @@ def main():
                   "(r > 0.95, the same maps above 0.5)."),
                   "", (f"'spikes': the network's units as Poisson spikes at {spike_rate:.2f} Hz "
                        "(hp.poisson_spikes), the mouse's median rate, on the first whole trials "
-                       f"covering the mouse session's {mouse_s:.0f} s; as recorded: "
+                       f"covering the mouse session's {mouse_s:.0f} s (" + ", ".join(
+                           f"{n}: {g['seconds']:.0f} s" for n, g in groups.items()
+                           if g.get("spikes")) + "); as recorded: "
                        f"{a.trials} trials.")]
     write_text(out / "cell_classes.md", "\n".join(lines) + "\n", what="class table")
     write_text(out / "cell_classes.json", json.dumps(jsonable({

@@ -40,7 +40,8 @@ def main():
     keep = np.arange(75, 500, 50)                        # every 20 s from 30 s
     batch = make_trials("localization", a.trials, "validation", 0, world="darkness")
     res = particle_filter(batch, a.particles, keep=keep)
-    ranks = posterior_ranks(res, batch)["mahalanobis"]          # (K * B,), time-major
+    all_ranks = posterior_ranks(res, batch)                     # (K * B,) each, time-major
+    ranks = all_ranks["mahalanobis"]
 
     contact = batch.feature("contact") > 0.5                      # (T, B)
     since = np.full(contact.shape, np.inf)
@@ -50,6 +51,12 @@ def main():
         since[t] = elapsed
     print_split("s since the last contact", since[keep].ravel(), ranks,
                 [0, 2, 8, 20, 60, np.inf])
+    # the heading drift's rank, two-sided: an over-confident drift posterior puts the truth
+    # in both extreme deciles
+    for kind in ("drift", "projection"):
+        print(f"-- {kind} rank")
+        print_split("s since the last contact", since[keep].ravel(), all_ranks[kind],
+                    [0, 2, 8, 20, 60, np.inf])
     spread = np.sqrt(res.cov[keep][..., :2].sum(-1)).ravel()
     print_split("posterior s.d. (m)", spread, ranks, np.quantile(spread, np.linspace(0, 1, 6)))
     mean_to_wall = wall_distance(batch.arena_vertices,

@@ -10,7 +10,8 @@
 #   nohup bash train_queue.sh > logs/queue.log 2>&1 &
 #
 # A run already being trained (the same command started twice) is refused by the
-# trainer's lock on its folder, so starting the queue twice does no harm.
+# trainer's lock on its folder, so starting the queue twice does no harm. A run whose
+# network is shipped and whose checkpoint was pruned (git rm) is skipped.
 set -u
 cd "$(dirname "$0")"
 mkdir -p logs
@@ -18,6 +19,13 @@ mkdir -p logs
 train() {                       # NAME TASK SEED [extra options...]
   local name=$1 task=$2 seed=$3
   shift 3
+  local shipped=${name%_s*}
+  [ "$seed" = 0 ] || shipped="${shipped}_seed$seed"
+  # exported only once finished: a shipped run is done, and its checkpoint may be pruned
+  if [ -f "hippo_probe/pretrained/$shipped.pt" ] && [ ! -f "runs/$name/checkpoint.pt" ]; then
+    echo "$(date -u +%FT%TZ) skip $name: shipped as hippo_probe/pretrained/$shipped.pt"
+    return 0
+  fi
   echo "$(date -u +%FT%TZ) start $name"
   local rc=0
   hippo-probe train --task "$task" --init-seed "$seed" --threads 1 --checkpoint-minutes 5 \
@@ -26,8 +34,6 @@ train() {                       # NAME TASK SEED [extra options...]
     echo "$(date -u +%FT%TZ) $name failed (exit $rc): see logs/$name.log"
     return "$rc"
   fi
-  local shipped=${name%_s*}
-  [ "$seed" = 0 ] || shipped="${shipped}_seed$seed"
   hippo-probe export-network "runs/$name" "$shipped" >> "logs/$name.log" 2>&1 &&
     echo "$(date -u +%FT%TZ) done $name -> hippo_probe/pretrained/$shipped.pt"
 }

@@ -12,7 +12,8 @@ from . import _common
 from ._common import AnalysisWarning
 from ._shuffles import MapStack, summarize
 from .border_score import _field_bins, _resolve_walls, rate_offset, stack_border_stats
-from .config import BORDER, CELL_CLASS, CONJUNCTIVE, GRID, PLACE_FIELD, SPEED, CellClassConfig
+from .config import (BORDER, CELL_CLASS, CONJUNCTIVE, CONVENTIONS, GRID, PLACE_FIELD, SPEED,
+                     CellClassConfig)
 from .conjunctive_tuning import conjunctive_arrays
 from .grid_score import _grid_kwargs, grid_stats, shuffled_scores
 from .grid_score import nan_reasons as grid_nan_reasons
@@ -125,6 +126,14 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
         ``is_head_direction``, ``is_speed``, ``is_conjunctive``; ``cell_class`` (str).
         ``table.to_dataframe()`` gives a pandas DataFrame.
 
+    Warns
+    -----
+    AnalysisWarning
+        On a noise-free kind (``CONVENTIONS.noise_free_kinds``, a network's units): with
+        thousands of samples almost any tuning beats the shuffles. Classify spikes drawn
+        at a cell's rate instead, ``classify_cells(hp.poisson_spikes(rec, mean_rate))``,
+        over a recording as long as the session compared with.
+
     References
     ----------
     [1] Langston et al. (2010), Science 328:1576-1580. [2] Solstad et al. (2008), Science
@@ -162,6 +171,14 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
                              ("unit", "pooled"))
     rec, env = _one_environment(rec, environment)
     sigma = GRID.sigma if sigma is None else sigma
+    kind = rec.attrs.get("activity_kind")
+    if kind in CONVENTIONS.noise_free_kinds:
+        warnings.warn(
+            f"activity_kind {kind!r} has no counting noise: with {rec.sizes['time']} samples "
+            "almost any tuning beats the time-shift shuffles, so most units pass every "
+            "test. To compare with recorded cells, classify spikes drawn at a cell's rate "
+            "over a session's duration: classify_cells(hp.poisson_spikes(rec, mean_rate=5.0))",
+            AnalysisWarning, stacklevel=2)
 
     # ---- spatial scores: one binning per batch of shifts for all three
     stack = MapStack(rec, n_shuffles=n_shuffles, seed=seed, bin_size=bin_size, sigma=sigma,

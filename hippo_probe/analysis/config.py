@@ -30,9 +30,14 @@ class RecordingConventions:
         tracked (it costs about 15% of a rate-map pass); should their maps or curves show
         negative values all the same, the map's minimum is used for the shift, with a
         warning.
+    noise_free_kinds : tuple of str
+        Kinds without counting noise (a network's units): with many samples any tuning at
+        all beats time-shift shuffles, so :func:`~hippo_probe.analysis.classify_cells`
+        warns on them and points to :func:`hippo_probe.poisson_spikes`.
     """
 
     signed_kinds: tuple = ("lstm_hidden",)
+    noise_free_kinds: tuple = ("lstm_hidden",)
     spike_kinds: tuple = ("spike_count",)
     nonnegative_kinds: tuple = ("spike_count", "rate")
 

@@ -53,6 +53,10 @@ def _ratio(a, b):
     return None if a is None or b is None or b == 0 else a / b
 
 
+def _difference(a, b):
+    return None if a is None or b is None else a - b
+
+
 class Claim(NamedTuple):
     """One quantitative claim of the study and what one set of figures says of it."""
 
@@ -145,9 +149,12 @@ def rows(fig):
            _verdict(acc_ok and err_ok, acc_ok or err_ok,
                     "accuracy ≥ 0.8 × and error ≤ 1.25 × PF-SLAM 10k's; partly: one of "
                     "the two"),
-           {"accuracy / PF-SLAM's": _ratio(net.get("accuracy"), (top or {}).get("accuracy")),
+           # accuracy as a difference: PF-SLAM's accuracy may be 0 (few particles for 100
+           # arenas in darkness), where a ratio is undefined; errors are never 0
+           {"accuracy − PF-SLAM's": _difference(net.get("accuracy"),
+                                                (top or {}).get("accuracy")),
             "error / PF-SLAM's": _ratio(net.get("error"), (top or {}).get("error"))},
-           {"accuracy / PF-SLAM's": 1.0, "error / PF-SLAM's": 1.0})
+           {"accuracy − PF-SLAM's": 0.0, "error / PF-SLAM's": 1.0})
 
     dims = {k: v for k, v in (_get(f5, "C_dimension") or {}).items() if v is not None}
     # the study's text: "The localization-only network has a dimension D=5.5 ... the

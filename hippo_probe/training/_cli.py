@@ -48,7 +48,8 @@ def add_commands(sub):
     p.add_argument("--stop-improvement", type=float, default=d.stop_improvement,
                    metavar="FRACTION",
                    help="stop before --steps once the validation loss improved by less than "
-                        "this fraction over the last fifth of the steps done (0 = never)")
+                        "this fraction over the last fifth of the steps done, checked from a "
+                        "quarter of --steps (0 = never)")
     p.add_argument("--max-hours", type=float, default=d.max_hours, metavar="H",
                    help="stop before --steps once the run's wall time, summed over resumes, "
                         "passes H hours (default: no cap but the step budget)")

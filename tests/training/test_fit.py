@@ -346,6 +346,11 @@ def test_stop_reason_follows_the_last_fifth_rule():
     assert stop_reason(config, falling, 5000, 0.0) is None
     # too early to judge, or the rule switched off
     assert stop_reason(config, flat[:4], 1500, 0.0) is None
+    # an early plateau of a long budget is not judged before a quarter of it
+    long_budget = TrainConfig(**{**TINY, "steps": 40000})
+    assert stop_reason(long_budget, flat, 5000, 0.0) is None
+    plateau_then_flat = flat + _validations([0.995] * 22)[11:]
+    assert "0.00%" in stop_reason(long_budget, plateau_then_flat, 10500, 0.0)
     assert stop_reason(TrainConfig(**{**TINY, "stop_improvement": None}), flat, 5000,
                        0.0) is None
     # the wall-time cap, whatever the curve

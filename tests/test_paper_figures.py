@@ -185,6 +185,24 @@ def test_results_spread_over_seeds(tmp_path):
     assert fig2 == {"darkness": {"network / PF, t > 100 s": [1.1, 1.3, 1.9]}}
 
 
+def test_results_dimension_without_scaling_range(tmp_path):
+    """A network whose C(r) has no scaling range is named as such, not dropped, and the
+    verdict rule (each within 20%) cannot call the claim reproduced without it."""
+    from hippo_probe.paper.results import write_results
+
+    run = tmp_path / "darkness-seed0"
+    run.mkdir()
+    (run / "fig5.json").write_text(json.dumps(
+        {"figure": "fig5", "size": {"name": "tiny"},
+         "C_dimension": {"localization": 5.5, "generalized": None, "specialized": 5.6},
+         "C_n_points": {"localization": 1000, "generalized": 1000, "specialized": 1000}}))
+    text = write_results(tmp_path, tmp_path / "RESULTS.md", None).read_text()
+    detail = [line for line in text.splitlines() if line.startswith("| Fig. 5C:")][-1]
+    assert "generalized: no scaling range" in detail
+    assert "localization 5.5" in detail and "specialized 5.6" in detail
+    assert "| not reproduced" in detail
+
+
 def test_network_vs_rodent(tmp_path):
     run = subprocess.run([sys.executable, str(ROOT / "analyses" / "network_vs_rodent.py"),
                           "--size", "tiny", "--out", str(tmp_path)], capture_output=True,

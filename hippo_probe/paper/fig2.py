@@ -31,7 +31,10 @@ def make(cfg, out):
         for name in ESTIMATES:
             numbers.setdefault(kind, {})[C.LABELS[name]] = \
                 err[kind].sel(estimate=name).values * scale
-    axes[0].legend(frameon=False, fontsize=8)
+    # one legend for the three panels, below them: every corner of a panel holds a curve
+    axes[0].get_legend().remove()
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center",
+               ncols=len(ESTIMATES), frameon=False, fontsize=9)
     fig.suptitle("Fig. 2 — localization in a familiar arena (mean radius 1 m, start "
                  "unknown), "
                  f"{numbers['n_trials']} test trials, mean ± s.e.m.")

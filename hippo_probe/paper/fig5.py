@@ -96,13 +96,16 @@ def make(cfg, out):
                                        c_range=C.DIMENSION_C_RANGE)
         a = ax[1, k]
         a.plot(res.log_r, res.log_c, color="k")
-        lo, hi = np.log10(res.attrs["r_min"]), np.log10(res.attrs["r_max"])
-        a.axvspan(lo, hi, color="tab:blue", alpha=0.15, label="scaling range")
+        if np.isfinite(res.attrs["dimension"]):
+            a.axvspan(np.log10(res.attrs["r_min"]), np.log10(res.attrs["r_max"]),
+                      color="tab:blue", alpha=0.15, label="scaling range")
         a.set_xlabel("log10 r")
         a.set_ylabel("log10 C(r)")
         nn = hp.intrinsic_dimension(rec, max_points=cfg.dimension_samples)
         nn_d = {str(e): float(v) for e, v in zip(nn.estimator.values, nn.dimension.values)}
-        a.set_title(f"C{k + 1}  {name}: D = {res.attrs['dimension']:.2f} "
+        d = res.attrs["dimension"]
+        d_text = f"D = {d:.2f}" if np.isfinite(d) else "no scaling range"
+        a.set_title(f"C{k + 1}  {name}: {d_text} "
                     f"({res.attrs['n_points']:,} states)\n"
                     + ", ".join(f"{e} {v:.1f}" for e, v in nn_d.items())
                     + " (nearest neighbours, same states)", fontsize=9)
@@ -110,10 +113,12 @@ def make(cfg, out):
         slope = a.twinx()
         slope.plot(res.log_r, res.local_slope, color="tab:orange", lw=0.9,
                    label="local slope")
-        d = res.attrs["dimension"]
         if np.isfinite(d):
             slope.axhline(d, color="tab:orange", ls=":", lw=0.8)
-        slope.set_ylim(0, 1.5 * d if np.isfinite(d) and d > 1 else 12)
+            slope.set_ylim(0, 1.5 * d if d > 1 else 12)
+        else:   # no plateau: show the slope over the searched range of C(r)
+            searched = res.log_c.values >= np.log10(C.DIMENSION_C_RANGE[0])
+            slope.set_ylim(0, 1.2 * np.nanmax(res.local_slope.values[searched], initial=10))
         slope.set_ylabel("d log C / d log r", color="tab:orange")
         handles = a.get_legend_handles_labels()
         extra = slope.get_legend_handles_labels()

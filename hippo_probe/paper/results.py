@@ -156,17 +156,24 @@ def rows(fig):
             "error / PF-SLAM's": _ratio(net.get("error"), (top or {}).get("error"))},
            {"accuracy − PF-SLAM's": 0.0, "error / PF-SLAM's": 1.0})
 
-    dims = {k: v for k, v in (_get(f5, "C_dimension") or {}).items() if v is not None}
+    measured = _get(f5, "C_dimension") or {}
+    dims = {k: v for k, v in measured.items() if v is not None}
+    # D is None where C(r) has no scaling range: the local slope never plateaus
     # the study's text: "The localization-only network has a dimension D=5.5 ... the
     # specialized network states ... D=5.6. The generalized network states ... D=8.5."
     paper = {"localization": 5.5, "specialized": 5.6, "generalized": 8.5}
-    close = [abs(dims[k] / v - 1) <= 0.2 for k, v in paper.items() if k in dims]
-    ordered = bool(dims) and max(dims, key=dims.get) == max(paper, key=paper.get)
+    # the rule needs all three: a network without a dimension can be neither within 20%
+    # nor the highest
+    complete = dims.keys() >= paper.keys()
+    close = [complete and abs(dims[k] / v - 1) <= 0.2 for k, v in paper.items()]
+    ordered = complete and max(dims, key=dims.get) == max(paper, key=paper.get)
     n_dim = min((_get(f5, "C_n_points") or {}).values(), default=None)
     bound = 2 * math.log10(n_dim) if n_dim else None
     yield Claim("Fig. 5C: correlation dimension of the hidden-state trajectories",
            "5.5 / 5.6 / 8.5 (localization / specialized / generalized, the study's text)",
-           (" / ".join(f"{k} {_fmt(v, '.1f')}" for k, v in dims.items()) or "n/a")
+           (" / ".join(f"{k} {_fmt(v, '.1f')}" if v is not None else
+                       f"{k}: no scaling range (the local slope never plateaus)"
+                       for k, v in measured.items()) or "n/a")
            + (f" ({n_dim:,} states each; values near 2 log10 N = {bound:.1f} "
               "(Eckmann & Ruelle 1992) are lower bounds)" if bound else "")
            + "".join(f"; {e} (same states): " + " / ".join(

@@ -97,9 +97,11 @@ def make(cfg, out, session=None):
         hp.plot.cumulative({name: groups[name][key] for name in names}, ax=ax,
                            styles={name: {"color": colors[name]} for name in names},
                            xlabel=label, ylabel="cumulative fraction of units")
-        if k:      # one legend (the first panel names every group)
-            ax.get_legend().remove()
-    axes[0].legend(frameon=False, fontsize=8, loc="lower right")
+        ax.get_legend().remove()
+    # one legend, below the panels (the first panel names every group; its corners hold
+    # curves)
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center",
+               ncols=len(groups), frameon=False, fontsize=9)
     fig.suptitle("Same analyses, same recording layout: mouse cells vs network units")
     out.mkdir(parents=True, exist_ok=True)
     save_figure(fig, out / "network_vs_rodent.png", dpi=130)

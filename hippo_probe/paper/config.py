@@ -50,7 +50,10 @@ class FigureConfig:
 
     name: str = "full"
     trials: int = 200            # test trials per recording
-    particles: int = 1000        # oracular particle filter
+    # oracular particle filter; None: the baselines' defaults, converged in each task
+    # (1,000 particles with a known start, 2,000 with an unknown one: README, "The
+    # baselines in the darkness world")
+    particles: int | None = None
     slam_particles: tuple = (100, 1000, 10000)
     slam_trials: int = 50         # PF-SLAM at 10,000 particles: ~30 s on 2 cores
     map_trials: int = 60         # trials of the two-arena recordings (rate maps)
@@ -181,10 +184,11 @@ def _digest(*parts) -> str:
 
 
 # ----------------------------------------------------------------------- baselines
-def baseline_estimates(batch, which, n_particles: int) -> dict:
+def baseline_estimates(batch, which, n_particles: int | None) -> dict:
     """Baselines' estimates in the ARENA frame (as recordings hold them), by name.
 
     ``which`` among "pi", "sh", "nb", "pf"; the PF also gives ``pf_cov`` and its drift.
+    ``n_particles`` None: the particle filter's default for the batch's start.
     """
     from hippo_probe.baselines.results import run_baselines
     from hippo_probe.model.record import baselines_from_dataset

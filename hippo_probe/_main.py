@@ -19,9 +19,10 @@ WORLDS = ("darkness", "compass")
 
 def add_commands(sub):
     sizes = ("tiny", "full", "paper")
-    size_help = ("data size: full, 200 test trials, about 2 minutes from scratch on 2 cores; "
-                 "paper, the study's scale: 1,000 test trials and PF-SLAM on 100 (about 4 "
-                 "minutes); tiny, a smoke test")
+    size_help = ("data size, per shipped run (a world's training seed) from scratch on 2 "
+                 "quiet cores: full, 200 test trials, about 2 minutes; paper, the study's "
+                 "scale: 1,000 test trials and PF-SLAM on 100, about 5 minutes; tiny, a "
+                 "smoke test")
     cache_help = ("folder of the cached recordings, reused by later runs of the same size "
                   "(default: OUT/cache)")
     p = sub.add_parser("main", help="the README's main job: world statistics and every "

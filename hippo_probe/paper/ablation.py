@@ -50,7 +50,11 @@ def make(figures_dir, out, runs=None) -> Path:
                 x = j + (k - (len(runs) - 1) / 2) * width
                 numbers.setdefault(claim.claim, {}).setdefault(world, {})[label] = \
                     values.tolist()
-                if not len(values):
+                if not len(values):       # e.g. no scaling range: say so, not a gap
+                    if seeds:
+                        ax.annotate("n/a", (x, 0), xytext=(0, 3), textcoords="offset points",
+                                    ha="center", va="bottom", rotation=90, fontsize=7,
+                                    color=WORLD_COLORS.get(world, "gray"))
                     continue
                 ax.bar(x, values.mean(), width * 0.9, color=WORLD_COLORS.get(world, "gray"),
                        alpha=0.25)

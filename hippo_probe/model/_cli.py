@@ -1,4 +1,4 @@
-"""``hippo-probe record`` and ``hippo-probe export-network``."""
+"""``hippo-probe record``, ``hippo-probe export-network`` and ``hippo-probe networks``."""
 
 from ..cli import check_output, count, one_of
 from ..tasks import SPLITS, TASKS
@@ -41,6 +41,12 @@ def add_commands(sub):
                    help="folder to write into (default: hippo_probe/pretrained)")
     e.set_defaults(run=_export)
 
+    n = sub.add_parser("networks", help="the shipped networks, their training seeds and "
+                                        "test errors as mean (min-max) over seeds")
+    n.add_argument("--per-seed", action="store_true",
+                   help="one row per network and seed, with its training steps and hours")
+    n.set_defaults(run=_networks)
+
 
 def _record(a):
     from pathlib import Path
@@ -79,3 +85,14 @@ def _export(a):
         check_output("--dest", a.dest, kind="folder")
     paths = export_network(a.run_dir, a.name, dest=a.dest)
     print("\n".join(f"wrote {p}" for p in paths))
+
+
+def _networks(a):
+    from ..pretrained.summary import markdown, seed_spread, shipped_table
+
+    table = shipped_table()
+    if table.empty:
+        raise FileNotFoundError("no shipped networks in this installation "
+                                "(hippo_probe/pretrained)")
+    print(table.to_string(float_format="{:.3f}".format) if a.per_seed
+          else markdown(seed_spread(table)))

@@ -37,10 +37,12 @@ def available() -> list:
     return sorted(p.stem for p in HERE.glob("*.pt"))
 
 
-def shipped_seeds(name: str) -> list[int]:
-    """Training seeds shipped for the network ``name`` (e.g. ``[0, 1, 2]``)."""
-    seeds = [0] if (HERE / f"{name}.pt").exists() else []
-    seeds += sorted(int(p.stem.rpartition("_seed")[2]) for p in HERE.glob(f"{name}_seed*.pt")
+def shipped_seeds(name: str, *, folder=None) -> list[int]:
+    """Training seeds shipped for the network ``name`` (e.g. ``[0, 1, 2]``), in ``folder``
+    (default: the package's)."""
+    folder = HERE if folder is None else Path(folder)
+    seeds = [0] if (folder / f"{name}.pt").exists() else []
+    seeds += sorted(int(p.stem.rpartition("_seed")[2]) for p in folder.glob(f"{name}_seed*.pt")
                     if p.stem.rpartition("_seed")[2].isdigit())
     return seeds
 

@@ -1,0 +1,120 @@
+"""What is shipped, and how its training seeds spread: read from the training logs
+(``<name>[_seed<k>].log.json``) beside the networks, so it needs no torch.
+
+The test metrics are the trainer's, on the task's 1,000-trial test split of the network's
+world (``hippo-probe train`` ends each run with them); the figures measure again on their
+own recordings (``paper_figures/RESULTS.md``).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from . import HERE, NAMES, checkpoint_world, shipped_seeds
+
+#: Test metrics reported per network: error (m) and arena accuracy at 50 / 100 / 200 s.
+METRICS = ("error_50s_m", "error_100s_m", "error_200s_m",
+           "accuracy_50s", "accuracy_100s", "accuracy_200s")
+
+
+def _log_file(folder: Path, name: str, seed: int) -> Path:
+    return folder / (f"{name}.log.json" if seed == 0 else f"{name}_seed{seed}.log.json")
+
+
+def shipped_table(names=NAMES, *, folder=None):
+    """One row per shipped network and training seed: its world, training and test metrics.
+
+    Parameters
+    ----------
+    names : iterable of str, optional
+        Network names (default: every name of :data:`NAMES`; unshipped ones are skipped).
+    folder : str or os.PathLike, optional
+        Folder of the shipped files (default: the package's).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index (``network``, ``seed``); columns ``world``, ``steps``, ``budget``,
+        ``stopped_early`` (the 1% rule ended it before its budget), ``hours`` (wall time of
+        training) and :data:`METRICS` (NaN where the task has no arena class).
+
+    Examples
+    --------
+    >>> from hippo_probe.pretrained.summary import shipped_table
+    >>> table = shipped_table(["localization"])
+    >>> table.index.names
+    FrozenList(['network', 'seed'])
+    """
+    import pandas as pd
+
+    folder = HERE if folder is None else Path(folder)
+    rows = []
+    for name in names:
+        for seed in shipped_seeds(name, folder=folder):
+            path = _log_file(folder, name, seed)
+            try:
+                log = json.loads(path.read_text())
+            except (OSError, ValueError) as err:
+                raise ValueError(f"the training log of {name!r} seed {seed} ({path}) cannot "
+                                 f"be read: {err}") from None
+            steps = (log.get("stopped") or {}).get("step") or max(
+                (v["step"] for v in log.get("validation", [])), default=0)
+            test = log.get("test") or {}
+            rows.append({"network": name, "seed": seed, "world": checkpoint_world(log),
+                         "steps": steps, "budget": log["config"]["steps"],
+                         "stopped_early": bool(log.get("stopped")),
+                         "hours": (log.get("wall_time_s") or float("nan")) / 3600,
+                         **{m: test.get(m, float("nan")) for m in METRICS}})
+    columns = ["network", "seed", "world", "steps", "budget", "stopped_early", "hours",
+               *METRICS]
+    return pd.DataFrame(rows, columns=columns).set_index(["network", "seed"])
+
+
+def seed_spread(table):
+    """Per network: the number of seeds and each metric as ``mean (min–max)`` over them.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        :func:`shipped_table`'s output.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``network``; columns ``world``, ``seeds`` (which are shipped) and one text
+        column per metric with a value ("—" where the task has none).
+    """
+    import pandas as pd
+
+    out = {}
+    for name, rows in table.groupby(level="network", sort=False):
+        entry = {"world": rows["world"].iloc[0],
+                 "seeds": ", ".join(str(s) for s in rows.index.get_level_values("seed"))}
+        for metric in METRICS:
+            values = rows[metric].dropna()
+            digits = 3 if metric.startswith("error") else 2
+            if values.empty:
+                entry[metric] = "—"
+            elif len(values) == 1:
+                entry[metric] = f"{values.iloc[0]:.{digits}f}"
+            else:
+                entry[metric] = (f"{values.mean():.{digits}f} ({values.min():.{digits}f}–"
+                                 f"{values.max():.{digits}f})")
+        out[name] = entry
+    frame = pd.DataFrame.from_dict(out, orient="index")
+    frame.index.name = "network"
+    return frame
+
+
+def markdown(spread) -> str:
+    """:func:`seed_spread` as a Markdown table (errors in m, at 50 / 100 / 200 s)."""
+    head = ["network", "world", "seeds", "error 50 / 100 / 200 s (m)",
+            "arena accuracy 50 / 100 / 200 s"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name, r in spread.iterrows():
+        errors = " / ".join(r[m] for m in METRICS[:3])
+        accuracy = " / ".join(r[m] for m in METRICS[3:])
+        lines.append(f"| {name} | {r['world']} | {r['seeds']} | {errors} | "
+                     f"{'—' if set(accuracy.split(' / ')) == {'—'} else accuracy} |")
+    return "\n".join(lines)

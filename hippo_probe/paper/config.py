@@ -276,7 +276,8 @@ def jsonable(obj):
     if isinstance(obj, np.ndarray):
         return jsonable(obj.tolist())
     if isinstance(obj, (np.floating, float)):
-        return None if not np.isfinite(obj) else round(float(obj), 6)
+        # six significant digits, not decimals: a p-value of 2e-9 must not become 0
+        return None if not np.isfinite(obj) else float(f"{float(obj):.6g}")
     if isinstance(obj, np.integer):
         return int(obj)
     return obj

@@ -198,7 +198,7 @@ def rows(fig):
                     "R² ≥ 0.5 for xx and yy, ≥ 0.1 above time in trial alone; partly: "
                     "≥ 0.05 above it for one component"),
            {f"R² {k} − time alone": r2[k] - r2_t.get(k, 0.0) if k in r2 else None
-            for k in ("xx", "yy")})
+            for k in ("xx", "yy", "xy")})
 
     rho, p = _get(f4, "E", "rank_correlation"), _get(f4, "E", "rank_correlation_p")
     yield Claim("Fig. 4E: units projecting strongly onto the classifier are less spatially "

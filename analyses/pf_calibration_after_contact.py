@@ -10,6 +10,12 @@ its mean to the walls, and prints the fraction of truths in the top and bottom d
 (0.10 each if calibrated).
 
     python analyses/pf_calibration_after_contact.py [--trials 600] [--particles N]
+        [--chunk 100]
+
+The filter runs on ``--chunk`` trials at a time, so the kept particles of a large filter
+(9 kept steps x trials x particles) fit in memory; each trial's random numbers depend on
+its index only, so the Mahalanobis and drift ranks do not depend on the chunk size (the
+random projection's directions do: they are drawn per chunk).
 """
 
 import argparse
@@ -36,11 +42,21 @@ def main():
     ap.add_argument("--trials", type=int, default=600)
     ap.add_argument("--particles", type=int, default=None,
                     help="particles of the filter (default: the filter's default)")
+    ap.add_argument("--chunk", type=int, default=100, help="trials per filter run")
     a = ap.parse_args()
     keep = np.arange(75, 500, 50)                        # every 20 s from 30 s
     batch = make_trials("localization", a.trials, "validation", 0, world="darkness")
-    res = particle_filter(batch, a.particles, keep=keep)
-    all_ranks = posterior_ranks(res, batch)                     # (K * B,) each, time-major
+    parts, means, covs = [], [], []
+    for lo in range(0, len(batch), a.chunk):
+        part = batch.select(slice(lo, lo + a.chunk))
+        res = particle_filter(part, a.particles, keep=keep)
+        ranks_of_part = posterior_ranks(res, part, seed=lo)      # (K * b,), time-major
+        parts.append({k: v.reshape(len(keep), -1) for k, v in ranks_of_part.items()})
+        means.append(res.mean[keep])
+        covs.append(res.cov[keep])
+        del res
+    all_ranks = {k: np.concatenate([p[k] for p in parts], axis=1).ravel() for k in parts[0]}
+    mean, cov = np.concatenate(means, axis=1), np.concatenate(covs, axis=1)   # (K, B, .)
     ranks = all_ranks["mahalanobis"]
 
     contact = batch.feature("contact") > 0.5                      # (T, B)
@@ -57,10 +73,10 @@ def main():
         print(f"-- {kind} rank")
         print_split("s since the last contact", since[keep].ravel(), all_ranks[kind],
                     [0, 2, 8, 20, 60, np.inf])
-    spread = np.sqrt(res.cov[keep][..., :2].sum(-1)).ravel()
+    spread = np.sqrt(cov[..., :2].sum(-1)).ravel()
     print_split("posterior s.d. (m)", spread, ranks, np.quantile(spread, np.linspace(0, 1, 6)))
     mean_to_wall = wall_distance(batch.arena_vertices,
-                                 np.swapaxes(res.mean[keep], 0, 1))[0].T.ravel()
+                                 np.swapaxes(mean, 0, 1))[0].T.ravel()
     print_split("posterior mean to wall (m)", mean_to_wall, ranks,
                 np.quantile(mean_to_wall, np.linspace(0, 1, 6)))
 

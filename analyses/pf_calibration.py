@@ -14,7 +14,10 @@ two Kolmogorov-Smirnov p-values:
   small: the effective sample is smaller than the count. Shown for comparison.
 
     python analyses/pf_calibration.py [--trials 200] [--worlds darkness compass]
-        [--tasks localization ...] [--particles N]
+        [--tasks localization ...] [--particles N] [--chunk 100]
+
+The filter runs on ``--chunk`` trials at a time (``filter_ranks``), so the particles it
+keeps for ranking fit in memory at tens of thousands of particles.
 """
 
 import argparse
@@ -22,8 +25,7 @@ import argparse
 import numpy as np
 from scipy import stats
 
-from hippo_probe.baselines import particle_filter
-from hippo_probe.baselines.calibration import posterior_ranks
+from hippo_probe.baselines.calibration import filter_ranks
 from hippo_probe.tasks import TASKS, make_trials
 
 
@@ -34,6 +36,7 @@ def main():
     ap.add_argument("--tasks", nargs="+", default=list(TASKS))
     ap.add_argument("--particles", type=int, default=None,
                     help="particles of the filter (default: the filter's default)")
+    ap.add_argument("--chunk", type=int, default=100, help="trials per filter run")
     a = ap.parse_args()
     keep = np.arange(25, 500, 50)                      # every 20 s from 10 s
     print(f"{a.trials} validation trials per task, ranks at {len(keep)} steps 20 s apart, "
@@ -43,10 +46,11 @@ def main():
     for world in a.worlds:
         for task in a.tasks:
             batch = make_trials(task, a.trials, "validation", 0, world=world)
-            res = particle_filter(batch, a.particles, keep=keep)
-            for name, rank in posterior_ranks(res, batch).items():
+            found = filter_ranks(batch, a.particles, keep=keep, chunk=a.chunk)
+            for name in ("mahalanobis", "projection", "drift"):
                 if name == "drift" and world == "compass":
                     continue
+                rank = found[name].ravel()
                 deciles = np.histogram(rank, bins=10, range=(0, 1))[0] / rank.size
                 per_time = [stats.kstest(r, "uniform").pvalue
                             for r in rank.reshape(len(keep), -1)]

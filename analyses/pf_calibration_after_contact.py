@@ -1,6 +1,6 @@
 """Where is the oracular particle filter over-confident? Its Mahalanobis ranks, split.
 
-The rank of the true position among the particles (``posterior_ranks``) is uniform for a
+The rank of the true position among the particles (``filter_ranks``) is uniform for a
 calibrated filter, and stays uniform within any subset chosen by a function of the data
 alone (the filter's own posterior, the contacts sensed so far); a subset chosen by the
 truth (e.g. the true distance to a wall) is not a valid test. This splits the ranks of
@@ -12,18 +12,15 @@ its mean to the walls, and prints the fraction of truths in the top and bottom d
     python analyses/pf_calibration_after_contact.py [--trials 600] [--particles N]
         [--chunk 100]
 
-The filter runs on ``--chunk`` trials at a time, so the kept particles of a large filter
-(9 kept steps x trials x particles) fit in memory; each trial's random numbers depend on
-its index only, so the Mahalanobis and drift ranks do not depend on the chunk size (the
-random projection's directions do: they are drawn per chunk).
+The filter runs on ``--chunk`` trials at a time (``filter_ranks``), so the particles it
+keeps for ranking fit in memory at tens of thousands of particles.
 """
 
 import argparse
 
 import numpy as np
 
-from hippo_probe.baselines import particle_filter
-from hippo_probe.baselines.calibration import posterior_ranks
+from hippo_probe.baselines.calibration import filter_ranks
 from hippo_probe.tasks import make_trials
 from hippo_probe.world.arena import wall_distance
 
@@ -46,17 +43,9 @@ def main():
     a = ap.parse_args()
     keep = np.arange(75, 500, 50)                        # every 20 s from 30 s
     batch = make_trials("localization", a.trials, "validation", 0, world="darkness")
-    parts, means, covs = [], [], []
-    for lo in range(0, len(batch), a.chunk):
-        part = batch.select(slice(lo, lo + a.chunk))
-        res = particle_filter(part, a.particles, keep=keep)
-        ranks_of_part = posterior_ranks(res, part, seed=lo)      # (K * b,), time-major
-        parts.append({k: v.reshape(len(keep), -1) for k, v in ranks_of_part.items()})
-        means.append(res.mean[keep])
-        covs.append(res.cov[keep])
-        del res
-    all_ranks = {k: np.concatenate([p[k] for p in parts], axis=1).ravel() for k in parts[0]}
-    mean, cov = np.concatenate(means, axis=1), np.concatenate(covs, axis=1)   # (K, B, .)
+    found = filter_ranks(batch, a.particles, keep=keep, chunk=a.chunk, progress=True)
+    all_ranks = {k: found[k].ravel() for k in ("mahalanobis", "projection", "drift")}
+    mean, cov = found["mean"], found["cov"]                              # (K, B, .)
     ranks = all_ranks["mahalanobis"]
 
     contact = batch.feature("contact") > 0.5                      # (T, B)

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._angles import wrap_angle
-from .._validators import check_seed
+from .._validators import check_positive, check_seed
 
 
 def posterior_ranks(result, batch, *, seed: int = 0) -> dict:
@@ -68,3 +68,52 @@ def posterior_ranks(result, batch, *, seed: int = 0) -> dict:
         "projection": np.sum(w * (along < true_along[..., None]), axis=-1).ravel(),
         "drift": np.sum(w * (offset < true_offset), axis=-1).ravel(),
     }
+
+
+def filter_ranks(batch, n_particles: int | None = None, *, keep, chunk: int = 100,
+                 seed: int = 0, progress: bool = False) -> dict:
+    """Ranks of the truth under the oracular particle filter, run on chunks of trials.
+
+    The filter keeps its particles at ``keep`` (K steps), which costs
+    ``K * chunk * n_particles`` particles of memory at a time instead of ``K * B * ...``:
+    tens of thousands of particles then fit. Each trial's random numbers depend on its
+    index only, so the Mahalanobis and drift ranks do not depend on ``chunk``; the random
+    projection's directions are drawn per chunk (seed ``seed + first trial``).
+
+    Parameters
+    ----------
+    batch : TrialBatch
+    n_particles : int, optional
+        The filter's (default: its own default for the task).
+    keep : sequence of int
+        Steps at which to rank.
+    chunk : int
+        Trials per filter run.
+    seed : int
+        Seed of the projection directions of the first chunk.
+    progress : bool
+        A tqdm bar over the chunks.
+
+    Returns
+    -------
+    dict
+        ``"mahalanobis"``, ``"projection"``, ``"drift"``: ranks (K, B), time-major (one
+        row per kept step, as :func:`posterior_ranks` orders its flat output);
+        ``"mean"`` (K, B, 2) and ``"cov"`` (K, B, 3): the posterior at the kept steps.
+    """
+    from tqdm.auto import tqdm
+
+    from .particle_filter import particle_filter
+
+    chunk = check_positive("chunk", chunk, integer=True)
+    keep = np.asarray(keep, dtype=np.int64)
+    parts = []
+    for lo in tqdm(range(0, len(batch), chunk), disable=not progress, desc="filter chunks"):
+        part = batch.select(slice(lo, lo + chunk))
+        result = particle_filter(part, n_particles, keep=keep)
+        ranks = posterior_ranks(result, part, seed=check_seed("seed", seed) + lo)
+        steps = np.asarray(result.attrs["kept_steps"], dtype=np.int64)
+        out = {k: v.reshape(steps.size, -1) for k, v in ranks.items()}
+        out["mean"], out["cov"] = result.mean[steps], result.cov[steps]
+        parts.append(out)
+    return {k: np.concatenate([p[k] for p in parts], axis=1) for k in parts[0]}

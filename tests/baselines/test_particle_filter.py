@@ -8,7 +8,7 @@ import pytest
 from scipy import stats
 
 from hippo_probe.baselines import particle_filter, path_integration
-from hippo_probe.baselines.calibration import posterior_ranks
+from hippo_probe.baselines.calibration import filter_ranks, posterior_ranks
 from hippo_probe.tasks import TASKS, make_trials, task_config
 from hippo_probe.world import WORLDS, NoiseModel, random_arena, regular_polygon
 
@@ -40,6 +40,21 @@ def test_calibrated(task, world):
         assert stats.kstest(rank, "uniform").pvalue > 0.01
         # and the 90% highest-rank region holds the truth 90% of the time
         assert abs(np.mean(rank < 0.9) - 0.9) < 0.05
+
+
+def test_filter_ranks_in_chunks_equal_one_run():
+    """Running the filter on chunks of trials (to bound memory) changes no Mahalanobis or
+    drift rank: each trial's random numbers depend on its index only."""
+    keep = [100, 300, 499]
+    batch = make_trials("generalized", 5, "validation", 0)
+    whole = posterior_ranks(particle_filter(batch, 200, keep=keep), batch)
+    chunked = filter_ranks(batch, 200, keep=keep, chunk=2)
+    for name in ("mahalanobis", "drift"):
+        assert chunked[name].shape == (3, 5)
+        np.testing.assert_array_equal(chunked[name].ravel(), whole[name])
+    assert chunked["mean"].shape == (3, 5, 2) and chunked["cov"].shape == (3, 5, 3)
+    with pytest.raises(ValueError, match="chunk"):
+        filter_ranks(batch, 200, keep=keep, chunk=0)
 
 
 def test_darkness_filter_tracks_the_drift():

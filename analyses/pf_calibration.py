@@ -14,7 +14,7 @@ two Kolmogorov-Smirnov p-values:
   small: the effective sample is smaller than the count. Shown for comparison.
 
     python analyses/pf_calibration.py [--trials 200] [--worlds darkness compass]
-        [--tasks localization ...] [--particles N] [--chunk 100]
+        [--tasks localization ...] [--particles N] [--chunk 100] [--per-time]
 
 The filter runs on ``--chunk`` trials at a time (``filter_ranks``), so the particles it
 keeps for ranking fit in memory at tens of thousands of particles.
@@ -37,6 +37,8 @@ def main():
     ap.add_argument("--particles", type=int, default=None,
                     help="particles of the filter (default: the filter's default)")
     ap.add_argument("--chunk", type=int, default=100, help="trials per filter run")
+    ap.add_argument("--per-time", action="store_true",
+                    help="also print each time's KS p-value and top-decile fraction")
     a = ap.parse_args()
     keep = np.arange(25, 500, 50)                      # every 20 s from 10 s
     print(f"{a.trials} validation trials per task, ranks at {len(keep)} steps 20 s apart, "
@@ -59,6 +61,11 @@ def main():
                       f"{stats.kstest(rank, 'uniform').pvalue:>8.3f}"
                       f"{np.mean(rank < 0.9):>8.3f}   "
                       + " ".join(f"{d:.3f}" for d in deciles), flush=True)
+                if a.per_time:
+                    top = [np.mean(r > 0.9) for r in rank.reshape(len(keep), -1)]
+                    print(f"{'':<37}p at {', '.join(f'{t:.0f}' for t in (keep + 1) * batch.dt)}"
+                          f" s: " + " ".join(f"{p:.3f}" for p in per_time)
+                          + "; top decile: " + " ".join(f"{f:.3f}" for f in top), flush=True)
 
 
 if __name__ == "__main__":

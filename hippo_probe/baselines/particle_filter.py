@@ -52,10 +52,17 @@ step; the filter sees only the network step and its particles' start and end):
   its drift :math:`h - \eta_i` (so the contact-angle likelihood is evaluated per particle).
 
 With these, the filter is close to calibrated (:mod:`~hippo_probe.baselines.calibration`,
-``analyses/pf_calibration.py``): on 200 validation trials per task and world, ranks 20 s
-apart, the central 90% holds the truth 88-90% of the time for position and drift; KS p
-0.08-0.95 in the compass world and 0.009-0.68 in the darkness world, where the extreme
-deciles hold 2-3% too much mass (slightly over-confident).
+``analyses/pf_calibration.py``): on 1,000 validation trials per task, ranks 20 s apart,
+the central 90% holds the truth 88.5-89.7% of the time at the default sizes in the
+darkness world. What is left is Monte Carlo error, not the model: 2-20 s after a contact
+the position posterior is too narrow (top Mahalanobis decile 0.12-0.13 at 2,000
+particles), and the excess shrinks with the particles (0.11 at 10,000, 0.106-0.110 at
+20,000), where every decile of every rank lies within 0.091-0.104 (localization task).
+One model effect remains: in the first 5-20 s of a localization trial (start unknown,
+posterior broad) the converged filter is under-confident (top decile 0.05-0.06 at 5-10 s),
+for a reason not yet found (the start prior matches the tasks' starts; checking every
+fine step for the absence of contact does not change it). The default sizes are set by
+the error's convergence, not by calibration.
 
 Implementation: one numba kernel per trial (``nogil``), trials spread over a thread pool.
 Particles are stored as separate contiguous ``x``/``y`` arrays, and the wall-distance

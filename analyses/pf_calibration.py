@@ -52,17 +52,17 @@ def main():
             for name in ("mahalanobis", "projection", "drift"):
                 if name == "drift" and world == "compass":
                     continue
-                rank = found[name].ravel()
+                by_time = found[name]                                # (K, B)
+                rank = by_time.ravel()
                 deciles = np.histogram(rank, bins=10, range=(0, 1))[0] / rank.size
-                per_time = [stats.kstest(r, "uniform").pvalue
-                            for r in rank.reshape(len(keep), -1)]
+                per_time = [stats.kstest(r, "uniform").pvalue for r in by_time]
                 print(f"{world:<10}{task:<14}{name:<13}"
                       f"{min(1.0, len(keep) * min(per_time)):>15.3f}"
                       f"{stats.kstest(rank, 'uniform').pvalue:>8.3f}"
                       f"{np.mean(rank < 0.9):>8.3f}   "
                       + " ".join(f"{d:.3f}" for d in deciles), flush=True)
                 if a.per_time:
-                    top = [np.mean(r > 0.9) for r in rank.reshape(len(keep), -1)]
+                    top = [np.mean(r > 0.9) for r in by_time]
                     print(f"{'':<37}p at {', '.join(f'{t:.0f}' for t in (keep + 1) * batch.dt)}"
                           f" s: " + " ".join(f"{p:.3f}" for p in per_time)
                           + "; top decile: " + " ".join(f"{f:.3f}" for f in top), flush=True)

@@ -106,12 +106,12 @@ def filter_ranks(batch, n_particles: int | None = None, *, keep, chunk: int = 10
     from .particle_filter import particle_filter
 
     chunk = check_positive("chunk", chunk, integer=True)
-    keep = np.asarray(keep, dtype=np.int64)
+    seed = check_seed("seed", seed)
     parts = []
     for lo in tqdm(range(0, len(batch), chunk), disable=not progress, desc="filter chunks"):
         part = batch.select(slice(lo, lo + chunk))
         result = particle_filter(part, n_particles, keep=keep)
-        ranks = posterior_ranks(result, part, seed=check_seed("seed", seed) + lo)
+        ranks = posterior_ranks(result, part, seed=seed + lo)
         steps = np.asarray(result.attrs["kept_steps"], dtype=np.int64)
         out = {k: v.reshape(steps.size, -1) for k, v in ranks.items()}
         out["mean"], out["cov"] = result.mean[steps], result.cov[steps]

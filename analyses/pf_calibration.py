@@ -15,6 +15,7 @@ two Kolmogorov-Smirnov p-values:
 
     python analyses/pf_calibration.py [--trials 200] [--worlds darkness compass]
         [--tasks localization ...] [--particles N] [--chunk 100] [--per-time]
+        [--outlier-near-walls]
 
 The filter runs on ``--chunk`` trials at a time (``filter_ranks``), so the particles it
 keeps for ranking fit in memory at tens of thousands of particles.
@@ -26,6 +27,7 @@ import numpy as np
 from scipy import stats
 
 from hippo_probe.baselines.calibration import filter_ranks
+from hippo_probe.baselines.config import BaselineConfig, ContactModelConfig
 from hippo_probe.tasks import TASKS, make_trials
 
 
@@ -37,9 +39,14 @@ def main():
     ap.add_argument("--particles", type=int, default=None,
                     help="particles of the filter (default: the filter's default)")
     ap.add_argument("--chunk", type=int, default=100, help="trials per filter run")
+    ap.add_argument("--outlier-near-walls", action="store_true",
+                    help="outlier floor only within reach of a wall "
+                         "(ContactModelConfig.outlier_near_walls)")
     ap.add_argument("--per-time", action="store_true",
                     help="also print each time's KS p-value and top-decile fraction")
     a = ap.parse_args()
+    baseline = BaselineConfig(
+        contact=ContactModelConfig(outlier_near_walls=a.outlier_near_walls))
     keep = np.arange(25, 500, 50)                      # every 20 s from 10 s
     print(f"{a.trials} validation trials per task, ranks at {len(keep)} steps 20 s apart, "
           f"{a.particles or 'default'} particles\n")
@@ -48,7 +55,8 @@ def main():
     for world in a.worlds:
         for task in a.tasks:
             batch = make_trials(task, a.trials, "validation", 0, world=world)
-            found = filter_ranks(batch, a.particles, keep=keep, chunk=a.chunk)
+            found = filter_ranks(batch, a.particles, keep=keep, chunk=a.chunk,
+                                 baseline=baseline)
             for name in ("mahalanobis", "projection", "drift"):
                 if name == "drift" and world == "compass":
                     continue

@@ -21,6 +21,7 @@ import argparse
 import numpy as np
 
 from hippo_probe.baselines.calibration import filter_ranks
+from hippo_probe.baselines.config import BaselineConfig, ContactModelConfig
 from hippo_probe.tasks import make_trials
 from hippo_probe.world.arena import wall_distance
 
@@ -40,10 +41,16 @@ def main():
     ap.add_argument("--particles", type=int, default=None,
                     help="particles of the filter (default: the filter's default)")
     ap.add_argument("--chunk", type=int, default=100, help="trials per filter run")
+    ap.add_argument("--outlier-near-walls", action="store_true",
+                    help="outlier floor only within reach of a wall "
+                         "(ContactModelConfig.outlier_near_walls)")
     a = ap.parse_args()
+    baseline = BaselineConfig(
+        contact=ContactModelConfig(outlier_near_walls=a.outlier_near_walls))
     keep = np.arange(75, 500, 50)                        # every 20 s from 30 s
     batch = make_trials("localization", a.trials, "validation", 0, world="darkness")
-    found = filter_ranks(batch, a.particles, keep=keep, chunk=a.chunk, progress=True)
+    found = filter_ranks(batch, a.particles, keep=keep, chunk=a.chunk, progress=True,
+                         baseline=baseline)
     all_ranks = {k: found[k].ravel() for k in ("mahalanobis", "projection", "drift")}
     mean, cov = found["mean"], found["cov"]                              # (K, B, .)
     ranks = all_ranks["mahalanobis"]

@@ -71,7 +71,7 @@ def posterior_ranks(result, batch, *, seed: int = 0) -> dict:
 
 
 def filter_ranks(batch, n_particles: int | None = None, *, keep, chunk: int = 100,
-                 seed: int = 0, progress: bool = False) -> dict:
+                 seed: int = 0, progress: bool = False, baseline=None) -> dict:
     """Ranks of the truth under the oracular particle filter, run on chunks of trials.
 
     The filter keeps its particles at ``keep`` (K steps), which costs
@@ -93,6 +93,8 @@ def filter_ranks(batch, n_particles: int | None = None, *, keep, chunk: int = 10
         Seed of the projection directions of the first chunk.
     progress : bool
         A tqdm bar over the chunks.
+    baseline : BaselineConfig, optional
+        The filter's configuration (default ``BaselineConfig()``).
 
     Returns
     -------
@@ -110,7 +112,7 @@ def filter_ranks(batch, n_particles: int | None = None, *, keep, chunk: int = 10
     parts = []
     for lo in tqdm(range(0, len(batch), chunk), disable=not progress, desc="filter chunks"):
         part = batch.select(slice(lo, lo + chunk))
-        result = particle_filter(part, n_particles, keep=keep)
+        result = particle_filter(part, n_particles, keep=keep, baseline=baseline)
         ranks = posterior_ranks(result, part, seed=seed + lo)
         steps = np.asarray(result.attrs["kept_steps"], dtype=np.int64)
         out = {k: v.reshape(steps.size, -1) for k, v in ranks.items()}

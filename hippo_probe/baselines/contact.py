@@ -146,6 +146,13 @@ class ContactModel:
     outlier_density : float
         Density of an unexplained contact: uniform distance in ``[0, touch_range]`` and
         angle over the half circle of approaching headings, ``1 / (pi touch_range)``.
+    outlier_reach : float
+        Particles whose start and end distances to their nearest walls sum to more get
+        no outlier floor. With ``ContactModelConfig.outlier_near_walls``,
+        ``2 touch_range + max_speed * network_dt``: an unexplained contact still happened
+        within ``touch_range`` of a wall, on a path at most ``max_speed * network_dt``
+        long (distance to a wall changes no faster than the path's length); otherwise
+        infinite (the floor everywhere).
     angle_cutoff : float
         In units of the angle likelihood's s.d.
     """
@@ -160,6 +167,7 @@ class ContactModel:
     min_clearance: float
     outlier_probability: float
     outlier_density: float
+    outlier_reach: float
     angle_cutoff: float
 
     @property
@@ -181,6 +189,8 @@ class ContactModel:
             min_clearance=sensors.min_clearance,
             outlier_probability=contact.outlier_probability,
             outlier_density=1.0 / (math.pi * sensors.touch_range),
+            outlier_reach=(2.0 * sensors.touch_range + motion.max_speed * motion.network_dt
+                           if contact.outlier_near_walls else math.inf),
             angle_cutoff=contact.angle_cutoff,
         )
 

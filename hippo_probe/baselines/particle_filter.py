@@ -23,7 +23,8 @@ drift is 0 and never moves. Each network step:
    likelihood of what was sensed (:mod:`~hippo_probe.baselines.contact`): for a contact,
    the sum over walls of the angle likelihood times the likelihood of the sensed
    distance given the particle's start and end distances to that wall, plus an outlier
-   floor; for no contact, the probability that it would not have touched: ``0`` when it
+   floor (with ``ContactModelConfig.outlier_near_walls``, only for particles whose path
+   could have reached a wall); for no contact, the probability that it would not have touched: ``0`` when it
    ends within ``touch_range`` of its nearest wall heading into it, softened by the
    heading noise, and the same at the step's midpoint. If every particle contradicts the
    step's observation (weights sum to 0) the observation is skipped for the particles
@@ -222,7 +223,8 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
             obs.angle[b], obs.path_length[b], pf.intermediate_checks, noise.speed_sd,
             noise.rotation_sd, drift_step_sd, pf.resample_threshold, model.kernel_args(),
             model.heading_sd, model.touch_range, model.min_clearance,
-            model.outlier_probability, model.outlier_density, floor, relative, class_output,
+            model.outlier_probability, model.outlier_density, model.outlier_reach, floor,
+            relative, class_output,
             snapshot_of_step, estimate[b], mean[b], cov[b], drift[b], classes[b], snap_xy[b],
             snap_w[b], snap_eta[b], snap_arena[b])
 
@@ -297,8 +299,8 @@ def _nearest_walls(walls, x, y, best, nearest, crossings):
 def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, contact,
                   distance, angle, path_length, n_checks, speed_sd, rotation_sd,
                   drift_step_sd, resample_threshold, contact_args, heading_sd, touch_range,
-                  min_clearance, outlier_p, outlier_density, floor, relative, class_output,
-                  snapshot_of_step, out_estimate, out_mean, out_cov, out_drift, out_class,
+                  min_clearance, outlier_p, outlier_density, outlier_reach, floor, relative,
+                  class_output, snapshot_of_step, out_estimate, out_mean, out_cov, out_drift, out_class,
                   snap_xy, snap_w, snap_eta, snap_arena):
     """One trial of the particle filter (module docstring, steps 1-4). Particles (``x, y``,
     their start ``sx, sy``, heading drift ``eta`` and arena hypothesis ``arena``, sorted)
@@ -354,12 +356,19 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
                 _contact_likelihood(walls[a], heading[t], angle[t], path_length[t],
                                     contact_args, distance[t], eta[lo:hi], xp[lo:hi],
                                     yp[lo:hi], x[lo:hi], y[lo:hi], lik[lo:hi])
+                # the start's nearest wall too, for the outlier floor's reach (the
+                # midpoint buffers are free: no-contact checks run on other steps)
+                _nearest_walls(walls[a], xp[lo:hi], yp[lo:hi], mid_best[lo:hi],
+                               mid_nearest[lo:hi], mid_crossings[lo:hi])
         for i in range(n):
             d = math.sqrt(best[i])
             if int(crossings[i]) % 2 == 0 or d < min_clearance:
                 lik[i] = 0.0
             elif touched:
-                lik[i] = (1.0 - outlier_p) * lik[i] + outlier_p * outlier_density
+                # an unexplained contact still needs a wall within reach of the path
+                reachable = d + math.sqrt(mid_best[i]) <= outlier_reach
+                lik[i] = (1.0 - outlier_p) * lik[i] + (
+                    outlier_p * outlier_density if reachable else 0.0)
             elif d < touch_range:
                 lik[i] = 1.0 - towards(walls[arena[i], int(nearest[i]), 7],
                                        heading[t] - eta[i], heading_sd)

@@ -57,6 +57,34 @@ def test_filter_ranks_in_chunks_equal_one_run():
         filter_ranks(batch, 200, keep=keep, chunk=0)
 
 
+def test_outlier_floor_near_walls_only_where_a_contact_could_happen():
+    """At a first contact under a broad posterior (start unknown), the default outlier
+    floor keeps particles far inside the arena; ``outlier_near_walls`` gives weight only
+    to particles whose step could have reached a wall (their end lies within
+    ``2 touch_range + max_speed * network_dt`` of one)."""
+    from hippo_probe.baselines.config import BaselineConfig, ContactModelConfig
+    from hippo_probe.world.arena import wall_distance
+
+    batch = make_trials("localization", 6, "validation", 0)
+    first = batch.contact.argmax(axis=0)
+    assert batch.contact.any(axis=0).all()
+    world = batch.config.world
+    reach = 2 * world.sensors.touch_range + world.motion.max_speed * world.motion.network_dt
+    beyond = {}
+    for near in (False, True):
+        res = particle_filter(batch, 500, keep=np.unique(first), baseline=BaselineConfig(
+            contact=ContactModelConfig(outlier_near_walls=near)))
+        steps = list(res.attrs["kept_steps"])
+        mass = []
+        for b in range(len(batch)):
+            k = steps.index(first[b])
+            far = wall_distance(batch.arena_vertices[b], res.particles[k, b])[0] > reach
+            mass.append(res.particle_weights[k, b][far].sum())
+        beyond[near] = np.array(mass)
+    assert (beyond[True] == 0).all()
+    assert beyond[False].max() > 0.01        # the default floor leaves mass out there
+
+
 def test_darkness_filter_tracks_the_drift():
     batch = make_trials("generalized", 20, "test", 0)
     res = particle_filter(batch)

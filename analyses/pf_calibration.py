@@ -15,7 +15,7 @@ two Kolmogorov-Smirnov p-values:
 
     python analyses/pf_calibration.py [--trials 200] [--worlds darkness compass]
         [--tasks localization ...] [--particles N] [--chunk 100] [--per-time]
-        [--outlier-near-walls]
+        [--outlier-near-walls] [--contact-proposals M]
 
 The filter runs on ``--chunk`` trials at a time (``filter_ranks``), so the particles it
 keeps for ranking fit in memory at tens of thousands of particles.
@@ -27,7 +27,8 @@ import numpy as np
 from scipy import stats
 
 from hippo_probe.baselines.calibration import filter_ranks
-from hippo_probe.baselines.config import BaselineConfig, ContactModelConfig
+from hippo_probe.baselines.config import (BaselineConfig, ContactModelConfig,
+                                         ParticleFilterConfig)
 from hippo_probe.tasks import TASKS, make_trials
 
 
@@ -42,11 +43,15 @@ def main():
     ap.add_argument("--outlier-near-walls", action="store_true",
                     help="outlier floor only within reach of a wall "
                          "(ContactModelConfig.outlier_near_walls)")
+    ap.add_argument("--contact-proposals", type=int, default=1,
+                    help="moves per particle at a contact step "
+                         "(ParticleFilterConfig.contact_proposals)")
     ap.add_argument("--per-time", action="store_true",
                     help="also print each time's KS p-value and top-decile fraction")
     a = ap.parse_args()
     baseline = BaselineConfig(
-        contact=ContactModelConfig(outlier_near_walls=a.outlier_near_walls))
+        contact=ContactModelConfig(outlier_near_walls=a.outlier_near_walls),
+        particle_filter=ParticleFilterConfig(contact_proposals=a.contact_proposals))
     keep = np.arange(25, 500, 50)                      # every 20 s from 10 s
     print(f"{a.trials} validation trials per task, ranks at {len(keep)} steps 20 s apart, "
           f"{a.particles or 'default'} particles\n")

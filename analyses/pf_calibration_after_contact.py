@@ -10,7 +10,7 @@ its mean to the walls, and prints the fraction of truths in the top and bottom d
 (0.10 each if calibrated).
 
     python analyses/pf_calibration_after_contact.py [--trials 600] [--particles N]
-        [--chunk 100]
+        [--chunk 100] [--outlier-near-walls] [--contact-proposals M]
 
 The filter runs on ``--chunk`` trials at a time (``filter_ranks``), so the particles it
 keeps for ranking fit in memory at tens of thousands of particles.
@@ -21,7 +21,8 @@ import argparse
 import numpy as np
 
 from hippo_probe.baselines.calibration import filter_ranks
-from hippo_probe.baselines.config import BaselineConfig, ContactModelConfig
+from hippo_probe.baselines.config import (BaselineConfig, ContactModelConfig,
+                                         ParticleFilterConfig)
 from hippo_probe.tasks import make_trials
 from hippo_probe.world.arena import wall_distance
 
@@ -44,9 +45,13 @@ def main():
     ap.add_argument("--outlier-near-walls", action="store_true",
                     help="outlier floor only within reach of a wall "
                          "(ContactModelConfig.outlier_near_walls)")
+    ap.add_argument("--contact-proposals", type=int, default=1,
+                    help="moves per particle at a contact step "
+                         "(ParticleFilterConfig.contact_proposals)")
     a = ap.parse_args()
     baseline = BaselineConfig(
-        contact=ContactModelConfig(outlier_near_walls=a.outlier_near_walls))
+        contact=ContactModelConfig(outlier_near_walls=a.outlier_near_walls),
+        particle_filter=ParticleFilterConfig(contact_proposals=a.contact_proposals))
     keep = np.arange(75, 500, 50)                        # every 20 s from 30 s
     batch = make_trials("localization", a.trials, "validation", 0, world="darkness")
     found = filter_ranks(batch, a.particles, keep=keep, chunk=a.chunk, progress=True,

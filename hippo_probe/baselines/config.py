@@ -121,6 +121,17 @@ class ParticleFilterConfig:
         Checking all 7 interior fine steps, as the simulator does, doubled the filter's
         cost (152 vs 82 ns per particle-step) and changed neither its error (35.5 vs
         35.4 mm) nor its calibration measurably (generalized task, 8-150 trials).
+    contact_proposals : int
+        1 (the default, for now): at a contact step each particle moves once. ``m > 1``:
+        each particle first splits into ``m`` children of a ``1/m`` share of its weight
+        that move independently, the sharp contact likelihood weighs all of them, and
+        resampling returns to the particle count (an unbiased step: the children sample
+        the same proposal, ``m`` times as densely). The contact likelihood is narrow (the
+        sensed distance to ~6 mm) next to one step's motion noise (~1.5 cm), so with one
+        move per particle most particles die at a contact and resampling duplicates the
+        few survivors: the default filter's position posterior is too narrow 2-20 s after
+        contacts (README, "The baselines in the darkness world"). Costs about ``m``
+        times a plain step at the ~5% of steps with a contact.
     """
 
     n_particles: int = 1000
@@ -129,6 +140,7 @@ class ParticleFilterConfig:
     resample_threshold: float = 0.5
     arena_floor: float = 0.1
     intermediate_checks: int = 1
+    contact_proposals: int = 1
 
     def __post_init__(self):
         check_positive("n_particles", self.n_particles, integer=True)
@@ -138,6 +150,7 @@ class ParticleFilterConfig:
         check_number("arena_floor", self.arena_floor, low=0, low_inclusive=True, high=1)
         check_number("intermediate_checks", self.intermediate_checks, low=0,
                      low_inclusive=True, integer=True)
+        check_positive("contact_proposals", self.contact_proposals, integer=True)
 
 
 @dataclass(frozen=True)

@@ -24,14 +24,18 @@ drift is 0 and never moves. Each network step:
    the sum over walls of the angle likelihood times the likelihood of the sensed
    distance given the particle's start and end distances to that wall, plus an outlier
    floor (with ``ContactModelConfig.outlier_near_walls``, only for particles whose path
-   could have reached a wall); for no contact, the probability that it would not have touched: ``0`` when it
-   ends within ``touch_range`` of its nearest wall heading into it, softened by the
-   heading noise, and the same at the step's midpoint. If every particle contradicts the
-   step's observation (weights sum to 0) the observation is skipped for the particles
-   inside the arena, and counted in ``attrs["n_skipped"]``.
+   could have reached a wall); for no contact, the probability that it would not have
+   touched: ``0`` when it ends within ``touch_range`` of its nearest wall heading into
+   it, softened by the heading noise, and the same at the step's midpoint. If every
+   particle contradicts the step's observation (weights sum to 0) the observation is
+   skipped for the particles inside the arena, and counted in ``attrs["n_skipped"]``.
 3. **Estimate.** Posterior mean and covariance (xx, yy, xy) from the weighted particles.
 4. **Resampling.** Systematic resampling when the effective sample size
-   :math:`1/\sum_i w_i^2` drops below ``resample_threshold * N``.
+   :math:`1/\sum_i w_i^2` drops below ``resample_threshold * N``. With
+   ``ParticleFilterConfig.contact_proposals`` = m > 1, at a contact step every particle
+   splits into m children before step 1 (each 1/m of its weight, moving independently),
+   and step 4 always resamples back to ``N``: m times the proposals where the
+   likelihood is sharpest, at about m times the cost of those ~5% of steps.
 
 Approximations of the contact process (the simulator runs at 8 fine steps per network
 step; the filter sees only the network step and its particles' start and end):
@@ -224,7 +228,7 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
             noise.rotation_sd, drift_step_sd, pf.resample_threshold, model.kernel_args(),
             model.heading_sd, model.touch_range, model.min_clearance,
             model.outlier_probability, model.outlier_density, model.outlier_reach, floor,
-            relative, class_output,
+            pf.contact_proposals, relative, class_output,
             snapshot_of_step, estimate[b], mean[b], cov[b], drift[b], classes[b], snap_xy[b],
             snap_w[b], snap_eta[b], snap_arena[b])
 
@@ -299,38 +303,58 @@ def _nearest_walls(walls, x, y, best, nearest, crossings):
 def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, contact,
                   distance, angle, path_length, n_checks, speed_sd, rotation_sd,
                   drift_step_sd, resample_threshold, contact_args, heading_sd, touch_range,
-                  min_clearance, outlier_p, outlier_density, outlier_reach, floor, relative,
-                  class_output, snapshot_of_step, out_estimate, out_mean, out_cov, out_drift, out_class,
-                  snap_xy, snap_w, snap_eta, snap_arena):
+                  min_clearance, outlier_p, outlier_density, outlier_reach, floor, proposals,
+                  relative, class_output, snapshot_of_step, out_estimate, out_mean, out_cov,
+                  out_drift, out_class, snap_xy, snap_w, snap_eta, snap_arena):
     """One trial of the particle filter (module docstring, steps 1-4). Particles (``x, y``,
     their start ``sx, sy``, heading drift ``eta`` and arena hypothesis ``arena``, sorted)
-    are updated in place; returns (number of skipped observations, number of
-    resamplings)."""
+    are the initial ones; returns (number of skipped observations, number of
+    resamplings).
+
+    At a contact step with ``proposals`` = m > 1, each particle first splits into m
+    children of weight w/m that move independently; the step's estimate uses all of them
+    and resampling returns to ``n`` particles (snapshots are then taken after it)."""
     n = x.size
+    cap = n * proposals
     n_arenas = walls.shape[0]
-    w = np.full(n, 1.0 / n)
-    lik = np.empty(n)
-    best = np.empty(n)
-    nearest = np.empty(n)
-    crossings = np.empty(n)
-    xp, yp = np.empty(n), np.empty(n)
-    xm, ym, mid_best, mid_nearest, mid_crossings = (np.empty(n), np.empty(n), np.empty(n),
-                                                   np.empty(n), np.empty(n))
-    x2, y2, sx2, sy2, eta2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    arena2 = np.empty(n, dtype=arena.dtype)
-    w2 = np.empty(n)
+    x, y, sx, sy, eta, arena = (_grown(x, cap), _grown(y, cap), _grown(sx, cap),
+                                _grown(sy, cap), _grown(eta, cap), _grown(arena, cap))
+    w = np.full(cap, 1.0 / n)
+    lik = np.empty(cap)
+    best = np.empty(cap)
+    nearest = np.empty(cap)
+    crossings = np.empty(cap)
+    xp, yp = np.empty(cap), np.empty(cap)
+    xm, ym, mid_best, mid_nearest, mid_crossings = (np.empty(cap), np.empty(cap),
+                                                   np.empty(cap), np.empty(cap),
+                                                   np.empty(cap))
+    x2, y2, sx2, sy2, eta2 = (np.empty(cap), np.empty(cap), np.empty(cap), np.empty(cap),
+                              np.empty(cap))
+    arena2 = np.empty(cap, dtype=arena.dtype)
+    w2 = np.empty(cap)
     alloc = np.empty(n_arenas, dtype=np.int64)
     mass = np.empty(n_arenas)
     block = np.zeros(n_arenas + 1, dtype=np.int64)
     n_skipped = 0
     n_resampled = 0
+    cur = n                  # particles now: n, or n * proposals in a split step
     for t in range(disp.shape[0]):
         touched = contact[t]
+        split = touched and proposals > 1
+        if split:
+            # m children per particle, kept contiguous (so still sorted by arena); from
+            # the last particle down, so no particle is overwritten before it is copied
+            for i in range(n - 1, -1, -1):
+                for c in range(proposals - 1, -1, -1):
+                    j = i * proposals + c
+                    x[j], y[j], sx[j], sy[j] = x[i], y[i], sx[i], sy[i]
+                    eta[j], arena[j], w[j] = eta[i], arena[i], w[i] / proposals
+            cur = cap
         # 1. motion: the drift diffuses, then D = (1 + e_s) R(e_r - eta) D_obs, the
         # first-order inverse of the sensor (the displacement was sensed in the frame
         # turned by the drift)
         dox, doy = disp[t, 0], disp[t, 1]
-        for i in range(n):
+        for i in range(cur):
             if drift_step_sd > 0.0:
                 eta[i] += drift_step_sd * rng.standard_normal()
             gain = max(1.0 + speed_sd * rng.standard_normal(), 0.0)
@@ -342,7 +366,7 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
         # 2. weights, one arena block at a time (particles are sorted by arena); each
         # particle reads the heading-dependent terms with its own heading, sensed - eta
         block[1:] = 0
-        for i in range(n):
+        for i in range(cur):
             block[arena[i] + 1] += 1
         for a in range(n_arenas):
             block[a + 1] += block[a]
@@ -360,7 +384,7 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
                 # midpoint buffers are free: no-contact checks run on other steps)
                 _nearest_walls(walls[a], xp[lo:hi], yp[lo:hi], mid_best[lo:hi],
                                mid_nearest[lo:hi], mid_crossings[lo:hi])
-        for i in range(n):
+        for i in range(cur):
             d = math.sqrt(best[i])
             if int(crossings[i]) % 2 == 0 or d < min_clearance:
                 lik[i] = 0.0
@@ -380,7 +404,7 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
             for j in range(1, n_checks + 1):
                 f = j / (n_checks + 1.0)
                 back = heading[t] - (1.0 - f) * turn[t]
-                for i in range(n):
+                for i in range(cur):
                     xm[i] = xp[i] + f * (x[i] - xp[i])
                     ym[i] = yp[i] + f * (y[i] - yp[i])
                 for a in range(n_arenas):
@@ -388,33 +412,33 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
                     if lo < hi:
                         _nearest_walls(walls[a], xm[lo:hi], ym[lo:hi], mid_best[lo:hi],
                                        mid_nearest[lo:hi], mid_crossings[lo:hi])
-                for i in range(n):
+                for i in range(cur):
                     if mid_best[i] < touch_range * touch_range:
                         lik[i] *= 1.0 - towards(walls[arena[i], int(mid_nearest[i]), 7],
                                                 back - eta[i], heading_sd)
         total = 0.0
-        for i in range(n):
+        for i in range(cur):
             total += w[i] * lik[i]
         if total > 0.0:
-            for i in range(n):
+            for i in range(cur):
                 w[i] *= lik[i] / total
         else:
             # the observation contradicts every particle: skip it for those still inside
             n_skipped += 1
-            for i in range(n):
+            for i in range(cur):
                 ok = int(crossings[i]) % 2 == 1 and best[i] >= min_clearance * min_clearance
                 lik[i] = 1.0 if ok else 0.0
                 total += w[i] * lik[i]
             if total > 0.0:
-                for i in range(n):
+                for i in range(cur):
                     w[i] *= lik[i] / total
             else:                                  # every particle left: undo the move
-                for i in range(n):
+                for i in range(cur):
                     x[i], y[i] = xp[i], yp[i]
         # 3. estimates
         mx = my = tx = ty = me = sum_w2 = 0.0
         mass[:] = 0.0
-        for i in range(n):
+        for i in range(cur):
             mx += w[i] * x[i]
             my += w[i] * y[i]
             me += w[i] * eta[i]
@@ -423,7 +447,7 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
             sum_w2 += w[i] * w[i]
             mass[arena[i]] += w[i]
         cxx = cyy = cxy = cee = 0.0
-        for i in range(n):
+        for i in range(cur):
             dx, dy, de = x[i] - mx, y[i] - my, eta[i] - me
             cxx += w[i] * dx * dx
             cyy += w[i] * dy * dy
@@ -436,15 +460,12 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
         if class_output:
             for a in range(n_arenas):
                 out_class[t, a] = mass[a]
-        k = snapshot_of_step[t]
-        if k >= 0:
-            for i in range(n):
-                snap_xy[k, i, 0], snap_xy[k, i, 1] = x[i], y[i]
-                snap_w[k, i] = w[i]
-                snap_eta[k, i] = eta[i]
-                snap_arena[k, i] = arena[i]
-        # 4. resampling, arena by arena (keeps the particles sorted by arena)
-        if 1.0 / sum_w2 < resample_threshold * n:
+        if not split:
+            _snapshot(snapshot_of_step[t], x, y, w, eta, arena, snap_xy, snap_w, snap_eta,
+                      snap_arena)
+        # 4. resampling, arena by arena (keeps the particles sorted by arena); a split
+        # step always returns to n particles
+        if split or 1.0 / sum_w2 < resample_threshold * cur:
             n_resampled += 1
             _allocate(mass, n, floor, rng.random(), alloc)
             out = 0
@@ -473,7 +494,31 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
             eta, eta2 = eta2, eta
             arena, arena2 = arena2, arena
             w, w2 = w2, w
+            cur = n
+        if split:
+            _snapshot(snapshot_of_step[t], x, y, w, eta, arena, snap_xy, snap_w, snap_eta,
+                      snap_arena)
     return n_skipped, n_resampled
+
+
+@numba.njit(cache=True, nogil=True)
+def _grown(a, size):
+    """A copy of ``a`` in an array of ``size`` elements (the rest uninitialised)."""
+    out = np.empty(size, dtype=a.dtype)
+    out[:a.size] = a
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _snapshot(k, x, y, w, eta, arena, snap_xy, snap_w, snap_eta, snap_arena):
+    """Store the first ``snap_w.shape[1]`` particles in snapshot ``k`` (none if k < 0)."""
+    if k < 0:
+        return
+    for i in range(snap_w.shape[1]):
+        snap_xy[k, i, 0], snap_xy[k, i, 1] = x[i], y[i]
+        snap_w[k, i] = w[i]
+        snap_eta[k, i] = eta[i]
+        snap_arena[k, i] = arena[i]
 
 
 @numba.njit(cache=True, nogil=True)

@@ -85,6 +85,29 @@ def test_outlier_floor_near_walls_only_where_a_contact_could_happen():
     assert beyond[False].max() > 0.01        # the default floor leaves mass out there
 
 
+def test_split_proposals_keep_more_distinct_particles_through_a_contact():
+    """With one move per particle, the sharp contact likelihood leaves few particles
+    carrying the posterior (effective sample size); with ``contact_proposals`` children
+    per particle, the particles kept after the contact are many more distinct ones, and
+    the error does not suffer."""
+    from hippo_probe.baselines.config import BaselineConfig, ParticleFilterConfig
+
+    batch = make_trials("generalized", 6, "validation", 0)
+    steps = [100 + int(np.argmax(batch.contact[100:, b])) for b in range(len(batch))]
+    assert all(batch.contact[t, b] for b, t in enumerate(steps))
+    results = {m: particle_filter(batch, 300, keep=steps, baseline=BaselineConfig(
+        particle_filter=ParticleFilterConfig(contact_proposals=m))) for m in (1, 8)}
+    kept = results[1].attrs["kept_steps"]
+    ess, distinct = [], []
+    for b, t in enumerate(steps):
+        k = kept.index(t)
+        ess.append(1 / np.sum(results[1].particle_weights[k, b] ** 2))
+        distinct.append(np.unique(results[8].particles[k, b, :, 0]).size)
+    assert np.mean(distinct) > 2 * np.mean(ess)
+    errors = {m: r.error(batch).mean() for m, r in results.items()}
+    assert errors[8] < 1.1 * errors[1]
+
+
 def test_darkness_filter_tracks_the_drift():
     batch = make_trials("generalized", 20, "test", 0)
     res = particle_filter(batch)
@@ -217,6 +240,11 @@ def test_bad_input_is_named():
         particle_filter(batch, 0)
     with pytest.raises(ValueError, match="`threads` must be > 0; got 0"):
         particle_filter(batch, 10, threads=0)          # not silently "every core"
+    from hippo_probe.baselines.config import ContactModelConfig, ParticleFilterConfig
+    with pytest.raises(ValueError, match="`contact_proposals` must be > 0; got 0"):
+        ParticleFilterConfig(contact_proposals=0)
+    with pytest.raises(TypeError, match="`outlier_near_walls` must be True or False"):
+        ContactModelConfig(outlier_near_walls="yes")
 
 
 def test_a_filter_configuration_that_disagrees_with_the_batch_is_refused():

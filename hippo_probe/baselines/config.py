@@ -131,7 +131,12 @@ class ParticleFilterConfig:
         move per particle most particles die at a contact and resampling duplicates the
         few survivors: the default filter's position posterior is too narrow 2-20 s after
         contacts (README, "The baselines in the darkness world"). Costs about ``m``
-        times a plain step at the ~5% of steps with a contact.
+        times a plain step at the ~5% of steps with a contact. Measured (1,000
+        validation trials per task, default counts, with ``outlier_near_walls``), m = 10
+        barely changes that: the central 90% holds 0.878 (localization, Mahalanobis;
+        0.874 with m = 1) and 0.891-0.897 (generalized), and the top Mahalanobis decile
+        stays at 0.11-0.13. The over-confidence is therefore not made at the contact
+        step itself; it is not the default.
     """
 
     n_particles: int = 1000

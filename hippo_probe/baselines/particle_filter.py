@@ -63,10 +63,12 @@ darkness world. What is left is Monte Carlo error, not the model: 2-20 s after a
 the position posterior is too narrow (top Mahalanobis decile 0.12-0.13 at 2,000
 particles), and the excess shrinks with the particles (0.11 at 10,000, 0.106-0.110 at
 20,000), where every decile of every rank lies within 0.091-0.104 (localization task).
-One model effect remains: in the first 5-20 s of a localization trial (start unknown,
-posterior broad) the converged filter is under-confident (top decile 0.05-0.06 at 5-10 s),
-for a reason not yet found (the start prior matches the tasks' starts; checking every
-fine step for the absence of contact does not change it). The default sizes are set by
+In the first 5-20 s of a localization trial (start unknown, posterior broad) the converged
+filter was under-confident (top decile 0.05-0.06 at 5-10 s): the contact likelihood's
+outlier floor, given to every particle, kept much of the mass deep inside the arena at
+the first contact. ``ContactModelConfig.outlier_near_walls`` gives it only where a contact
+could happen (top decile 0.08-0.10 at 5-10 s, 20,000 particles); it is not yet the
+default (README, "The baselines in the darkness world"). The default sizes are set by
 the error's convergence, not by calibration.
 
 Implementation: one numba kernel per trial (``nogil``), trials spread over a thread pool.

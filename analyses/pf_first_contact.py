@@ -35,6 +35,7 @@ from hippo_probe.tasks import make_trials
 from hippo_probe.world.arena import wall_distance
 
 STEPS = 26
+FIRST_BEFORE = 20           # steps: first contacts in the first 8 s
 LAGS = (0, 1, 5)
 TIME_MAJOR = ("inputs", "target", "position", "head_direction", "heading_drift", "contact")
 
@@ -83,10 +84,10 @@ def main():
     a = ap.parse_args()
     batch = first_steps(make_trials("localization", a.trials, "validation", 0), STEPS)
     first = np.where(batch.contact.any(0), batch.contact.argmax(0), STEPS)
-    chosen = np.flatnonzero(first < STEPS - max(LAGS))
+    chosen = np.flatnonzero(first < FIRST_BEFORE)
     batch, first = batch.select(chosen), first[chosen]
     print(f"{len(chosen)} of {a.trials} validation trials (localization, darkness) have "
-          f"their first contact before {(STEPS - max(LAGS)) * batch.dt:.1f} s; "
+          f"their first contact in the first {FIRST_BEFORE * batch.dt:.0f} s; "
           f"{a.particles} particles\n")
     print(f"{'outlier floor':<16}{'steps after':>12}  {'rank':<15}{'top':>6}{'bottom':>8}"
           f"{'KS p':>8}")

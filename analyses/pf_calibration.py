@@ -27,8 +27,7 @@ import numpy as np
 from scipy import stats
 
 from hippo_probe.baselines.calibration import filter_ranks
-from hippo_probe.baselines.config import (BaselineConfig, ContactModelConfig,
-                                         ParticleFilterConfig)
+from _filter_options import add_filter_options, baseline_config
 from hippo_probe.tasks import TASKS, make_trials
 
 
@@ -37,21 +36,11 @@ def main():
     ap.add_argument("--trials", type=int, default=200)
     ap.add_argument("--worlds", nargs="+", default=["darkness", "compass"])
     ap.add_argument("--tasks", nargs="+", default=list(TASKS))
-    ap.add_argument("--particles", type=int, default=None,
-                    help="particles of the filter (default: the filter's default)")
-    ap.add_argument("--chunk", type=int, default=100, help="trials per filter run")
-    ap.add_argument("--outlier-near-walls", action="store_true",
-                    help="outlier floor only within reach of a wall "
-                         "(ContactModelConfig.outlier_near_walls)")
-    ap.add_argument("--contact-proposals", type=int, default=1,
-                    help="moves per particle at a contact step "
-                         "(ParticleFilterConfig.contact_proposals)")
+    add_filter_options(ap)
     ap.add_argument("--per-time", action="store_true",
                     help="also print each time's KS p-value and top-decile fraction")
     a = ap.parse_args()
-    baseline = BaselineConfig(
-        contact=ContactModelConfig(outlier_near_walls=a.outlier_near_walls),
-        particle_filter=ParticleFilterConfig(contact_proposals=a.contact_proposals))
+    baseline = baseline_config(a)
     keep = np.arange(25, 500, 50)                      # every 20 s from 10 s
     print(f"{a.trials} validation trials per task, ranks at {len(keep)} steps 20 s apart, "
           f"{a.particles or 'default'} particles\n")

@@ -21,8 +21,7 @@ import argparse
 import numpy as np
 
 from hippo_probe.baselines.calibration import filter_ranks
-from hippo_probe.baselines.config import (BaselineConfig, ContactModelConfig,
-                                         ParticleFilterConfig)
+from _filter_options import add_filter_options, baseline_config
 from hippo_probe.tasks import make_trials
 from hippo_probe.world.arena import wall_distance
 
@@ -39,19 +38,9 @@ def print_split(label, values, ranks, edges):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials", type=int, default=600)
-    ap.add_argument("--particles", type=int, default=None,
-                    help="particles of the filter (default: the filter's default)")
-    ap.add_argument("--chunk", type=int, default=100, help="trials per filter run")
-    ap.add_argument("--outlier-near-walls", action="store_true",
-                    help="outlier floor only within reach of a wall "
-                         "(ContactModelConfig.outlier_near_walls)")
-    ap.add_argument("--contact-proposals", type=int, default=1,
-                    help="moves per particle at a contact step "
-                         "(ParticleFilterConfig.contact_proposals)")
+    add_filter_options(ap)
     a = ap.parse_args()
-    baseline = BaselineConfig(
-        contact=ContactModelConfig(outlier_near_walls=a.outlier_near_walls),
-        particle_filter=ParticleFilterConfig(contact_proposals=a.contact_proposals))
+    baseline = baseline_config(a)
     keep = np.arange(75, 500, 50)                        # every 20 s from 30 s
     batch = make_trials("localization", a.trials, "validation", 0, world="darkness")
     found = filter_ranks(batch, a.particles, keep=keep, chunk=a.chunk, progress=True,

@@ -340,6 +340,7 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
     n_skipped = 0
     n_resampled = 0
     cur = n                  # particles now: n, or n * proposals in a split step
+    near_walls_only = outlier_reach < math.inf
     for t in range(disp.shape[0]):
         touched = contact[t]
         split = touched and proposals > 1
@@ -382,17 +383,19 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
                 _contact_likelihood(walls[a], heading[t], angle[t], path_length[t],
                                     contact_args, distance[t], eta[lo:hi], xp[lo:hi],
                                     yp[lo:hi], x[lo:hi], y[lo:hi], lik[lo:hi])
-                # the start's nearest wall too, for the outlier floor's reach (the
-                # midpoint buffers are free: no-contact checks run on other steps)
-                _nearest_walls(walls[a], xp[lo:hi], yp[lo:hi], mid_best[lo:hi],
-                               mid_nearest[lo:hi], mid_crossings[lo:hi])
+                if near_walls_only:
+                    # the start's nearest wall too, for the outlier floor's reach (the
+                    # midpoint buffers are free: no-contact checks run on other steps)
+                    _nearest_walls(walls[a], xp[lo:hi], yp[lo:hi], mid_best[lo:hi],
+                                   mid_nearest[lo:hi], mid_crossings[lo:hi])
         for i in range(cur):
             d = math.sqrt(best[i])
             if int(crossings[i]) % 2 == 0 or d < min_clearance:
                 lik[i] = 0.0
             elif touched:
                 # an unexplained contact still needs a wall within reach of the path
-                reachable = d + math.sqrt(mid_best[i]) <= outlier_reach
+                reachable = (not near_walls_only
+                             or d + math.sqrt(mid_best[i]) <= outlier_reach)
                 lik[i] = (1.0 - outlier_p) * lik[i] + (
                     outlier_p * outlier_density if reachable else 0.0)
             elif d < touch_range:

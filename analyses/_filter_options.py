@@ -1,0 +1,24 @@
+"""Command-line options of the particle filter's model, shared by the calibration scripts."""
+
+from hippo_probe.baselines.config import (BaselineConfig, ContactModelConfig,
+                                         ParticleFilterConfig)
+
+
+def add_filter_options(parser):
+    """``--particles``, ``--chunk``, ``--outlier-near-walls``, ``--contact-proposals``."""
+    parser.add_argument("--particles", type=int, default=None,
+                        help="particles of the filter (default: the filter's default)")
+    parser.add_argument("--chunk", type=int, default=100, help="trials per filter run")
+    parser.add_argument("--outlier-near-walls", action="store_true",
+                        help="outlier floor only within reach of a wall "
+                             "(ContactModelConfig.outlier_near_walls)")
+    parser.add_argument("--contact-proposals", type=int, default=1,
+                        help="moves per particle at a contact step "
+                             "(ParticleFilterConfig.contact_proposals)")
+
+
+def baseline_config(args) -> BaselineConfig:
+    """The filter configuration the parsed options ask for."""
+    return BaselineConfig(
+        contact=ContactModelConfig(outlier_near_walls=args.outlier_near_walls),
+        particle_filter=ParticleFilterConfig(contact_proposals=args.contact_proposals))

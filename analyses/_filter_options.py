@@ -5,13 +5,14 @@ from hippo_probe.baselines.config import (BaselineConfig, ContactModelConfig,
 
 
 def add_filter_options(parser):
-    """``--particles``, ``--chunk``, ``--outlier-near-walls``, ``--contact-proposals``."""
+    """``--particles``, ``--chunk``, ``--outlier-everywhere``, ``--contact-proposals``."""
     parser.add_argument("--particles", type=int, default=None,
                         help="particles of the filter (default: the filter's default)")
     parser.add_argument("--chunk", type=int, default=100, help="trials per filter run")
-    parser.add_argument("--outlier-near-walls", action="store_true",
-                        help="outlier floor only within reach of a wall "
-                             "(ContactModelConfig.outlier_near_walls)")
+    parser.add_argument("--outlier-everywhere", action="store_true",
+                        help="the contact's outlier floor for every particle, as before "
+                             "session 13 (default: only within reach of a wall; "
+                             "ContactModelConfig.outlier_near_walls)")
     parser.add_argument("--contact-proposals", type=int, default=1,
                         help="moves per particle at a contact step "
                              "(ParticleFilterConfig.contact_proposals)")
@@ -20,5 +21,5 @@ def add_filter_options(parser):
 def baseline_config(args) -> BaselineConfig:
     """The filter configuration the parsed options ask for."""
     return BaselineConfig(
-        contact=ContactModelConfig(outlier_near_walls=args.outlier_near_walls),
+        contact=ContactModelConfig(outlier_near_walls=not args.outlier_everywhere),
         particle_filter=ParticleFilterConfig(contact_proposals=args.contact_proposals))

@@ -15,7 +15,7 @@ two Kolmogorov-Smirnov p-values:
 
     python analyses/pf_calibration.py [--trials 200] [--worlds darkness compass]
         [--tasks localization ...] [--particles N] [--chunk 100] [--per-time]
-        [--outlier-near-walls] [--contact-proposals M]
+        [--outlier-everywhere] [--contact-proposals M]
 
 The filter runs on ``--chunk`` trials at a time (``filter_ranks``), so the particles it
 keeps for ranking fit in memory at tens of thousands of particles.

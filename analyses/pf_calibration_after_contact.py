@@ -10,7 +10,7 @@ its mean to the walls, and prints the fraction of truths in the top and bottom d
 (0.10 each if calibrated).
 
     python analyses/pf_calibration_after_contact.py [--trials 600] [--particles N]
-        [--chunk 100] [--outlier-near-walls] [--contact-proposals M]
+        [--chunk 100] [--outlier-everywhere] [--contact-proposals M]
 
 The filter runs on ``--chunk`` trials at a time (``filter_ranks``), so the particles it
 keeps for ranking fit in memory at tens of thousands of particles.

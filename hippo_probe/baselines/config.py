@@ -39,19 +39,17 @@ class ContactModelConfig:
         contacts lie beyond the 1e-5 quantile of the distance likelihood. Such a
         contact keeps a likelihood floor instead of killing every particle.
     outlier_near_walls : bool
-        False (the default, for now): the outlier floor is given to every particle. True:
-        only to particles whose step could have reached a wall (the distances of its
-        start and end to their nearest walls sum to at most ``2 touch_range + max_speed
-        * network_dt``); farther from every wall a contact is impossible, not merely
-        unexplained. This is the correct model: with the floor everywhere, a first
-        contact under a broad posterior (localization task, start unknown) leaves much
-        of the mass in the arena's interior, and the filter is under-confident there
-        (at 10,000 particles, Mahalanobis rank at the first contact: top decile 0.037,
-        KS p < 1e-4 on 602 validation trials; with this option 0.085, p = 0.16). It is
-        not yet the default: the floor's spread masks the default-size filter's Monte
-        Carlo over-confidence after contacts, and switching it on changes every
-        particle-filter number of the README and RESULTS.md (see README, "The
-        baselines in the darkness world").
+        True (the default): the outlier floor is given only to particles whose step
+        could have reached a wall (the distances of its start and end to their nearest
+        walls sum to at most ``2 touch_range + max_speed * network_dt``, exact since a
+        distance to a wall changes no faster than the path's length); farther from every
+        wall a contact is impossible, not merely unexplained. False (before session 13):
+        every particle gets the floor, and a first contact under a broad posterior
+        (localization task, start unknown) leaves much of the mass in the arena's
+        interior, so the filter is under-confident there (at 10,000 particles,
+        Mahalanobis rank at the first contact: top decile 0.037, KS p < 1e-4 on 602
+        validation trials; near walls only 0.085, p = 0.16;
+        ``analyses/pf_first_contact.py``).
     angle_cutoff : float
         6 standard deviations: walls whose normal disagrees more with the sensed angle get
         zero angle likelihood, so the particle kernels skip them (exp(-18) ~ 1.5e-8 of the
@@ -64,7 +62,7 @@ class ContactModelConfig:
     distance_slop_sd: float = 0.003
     path_length_error: float = 0.2
     outlier_probability: float = 0.01
-    outlier_near_walls: bool = False
+    outlier_near_walls: bool = True
     angle_cutoff: float = 6.0
     single_hypothesis_gate: float = 2.0
 
@@ -122,7 +120,7 @@ class ParticleFilterConfig:
         cost (152 vs 82 ns per particle-step) and changed neither its error (35.5 vs
         35.4 mm) nor its calibration measurably (generalized task, 8-150 trials).
     contact_proposals : int
-        1 (the default, for now): at a contact step each particle moves once. ``m > 1``:
+        1 (the default): at a contact step each particle moves once. ``m > 1``:
         each particle first splits into ``m`` children of a ``1/m`` share of its weight
         that move independently, the sharp contact likelihood weighs all of them, and
         resampling returns to the particle count (an unbiased step: the children sample

@@ -23,23 +23,52 @@ def test_error_stays_bounded_while_pi_drifts():
     assert pf.max() < 0.1                                   # within 10 cm all along
 
 
-@pytest.mark.parametrize("world", WORLDS)
-@pytest.mark.parametrize("task", TASKS)
+# ranks 20 s apart, so that successive ranks of a trial are nearly independent
+CALIBRATION_STEPS = np.arange(25, 500, 50)
+
+
+def assert_calibrated(ranks):
+    """Uniform ranks: KS, and the central 90% (the lower 90% of ranks) holding the truth
+    90% of the time."""
+    for name, rank in ranks.items():
+        assert stats.kstest(rank, "uniform").pvalue > 0.01, name
+        assert abs(np.mean(rank < 0.9) - 0.9) < 0.05, name
+
+
+# The localization filter of the darkness world is over-confident at its default 2,000
+# particles (central 90% holds 0.867 here, 0.870-0.874 on 300-1,000 validation trials;
+# README, "The baselines in the darkness world"): Monte Carlo error, which 150 trials
+# resolve. Strict, so that a filter which removes it turns this into a failure to look at.
+OVERCONFIDENT_AT_DEFAULT = pytest.mark.xfail(
+    strict=True, reason="Monte Carlo over-confidence of the default localization filter")
+
+
+@pytest.mark.parametrize("task, world", [
+    pytest.param(task, world, marks=[pytest.mark.slow, OVERCONFIDENT_AT_DEFAULT])
+    if (task, world) == ("localization", "darkness") else (task, world)
+    for world in WORLDS for task in TASKS])
 def test_calibrated(task, world):
     """The rank of the truth among the particles is uniform: position in both worlds,
-    and the heading drift in the darkness world (default particle counts)."""
-    # snapshots 20 s apart so that successive ranks of a trial are nearly independent
-    keep = np.arange(25, 500, 50)
-    batch = make_trials(task, 60, "validation", 0, world=world)
-    res = particle_filter(batch, keep=keep)
+    and the heading drift in the darkness world (default particle counts). 150 trials
+    put the coverage of the central 90% within about 0.01 of the filter's (60 did not:
+    0.850-0.893 where 150 trials read 0.875-0.897)."""
+    batch = make_trials(task, 150, "validation", 0, world=world)
+    res = particle_filter(batch, keep=CALIBRATION_STEPS)
     ranks = posterior_ranks(res, batch)
     if world == "compass":
         assert (res.particle_drifts == 0).all() and (res.drift_sd == 0).all()
         del ranks["drift"]
-    for rank in ranks.values():
-        assert stats.kstest(rank, "uniform").pvalue > 0.01
-        # and the 90% highest-rank region holds the truth 90% of the time
-        assert abs(np.mean(rank < 0.9) - 0.9) < 0.05
+    assert_calibrated(ranks)
+
+
+@pytest.mark.slow
+def test_converged_localization_filter_calibrated():
+    """At 20,000 particles the localization filter of the darkness world is calibrated
+    (its model, the contact's outlier floor included, without the default's Monte Carlo
+    error)."""
+    batch = make_trials("localization", 60, "validation", 0)
+    ranks = filter_ranks(batch, 20_000, keep=CALIBRATION_STEPS, chunk=20)
+    assert_calibrated({k: ranks[k].ravel() for k in ("mahalanobis", "projection", "drift")})
 
 
 def test_filter_ranks_in_chunks_equal_one_run():

@@ -1,9 +1,9 @@
 """Is the oracular particle filter calibrated? Ranks of the truth among its particles.
 
-For each task and world, the default-size filter runs on validation trials with its
-particles kept every 20 s; the rank of the true position (Mahalanobis and a random
-projection) and of the true heading drift among the particles should be uniform. Prints
-the coverage of the central 90%, the ten decile fractions (0.1 each if calibrated) and
+For each task and world, the filter (default size, or ``--particles``) runs on validation
+trials with its particles kept every 20 s; the rank of the true position (Mahalanobis and
+a random projection) and of the true heading drift among the particles should be
+uniform. Prints the fraction of truths in the 90% region (rank < 0.9), the ten decile fractions (0.1 each if calibrated) and
 two Kolmogorov-Smirnov p-values:
 
 - per time: one rank per trial at each kept time (independent across trials, as the KS

@@ -1,9 +1,10 @@
-"""Is the 1,000-particle oracular particle filter converged? The same trials at 10,000.
+"""Is the oracular particle filter converged? The same trials at several particle counts.
 
-The figures compare the networks with the oracular particle filter at 1,000 particles
-(the project's default). If more particles lowered its error, every network / PF ratio
-would be understated. This runs the filter at 1,000 and 10,000 particles on the same test
-trials of each task and prints the mean Euclidean error at 50 / 100 / 200 s.
+The figures compare the networks with the oracular particle filter at its default size
+(1,000 particles with a known start, 2,000 with an unknown one). If more particles lowered
+its error, every network / PF ratio would be understated. This runs the filter at each
+``--particles`` count on the same test trials of each task and prints the mean Euclidean
+error at 50 / 100 / 200 s.
 
     python analyses/pf_convergence.py [--trials 50] [--particles 1000 10000] [--out figures/]
 """

@@ -63,11 +63,14 @@ def posterior_ranks(result, batch, *, seed: int = 0) -> dict:
     centre = np.angle(np.einsum("kbn,kbn->kb", w, np.exp(1j * drifts)))[..., None]
     offset = wrap_angle(drifts - centre)
     true_offset = wrap_angle(batch.heading_drift[steps][..., None] - centre)
-    return {
-        "mahalanobis": np.sum(w * (own < true[..., None]), axis=-1).ravel(),
-        "projection": np.sum(w * (along < true_along[..., None]), axis=-1).ravel(),
-        "drift": np.sum(w * (offset < true_offset), axis=-1).ravel(),
+    ranks = {
+        "mahalanobis": np.sum(w * (own < true[..., None]), axis=-1),
+        "projection": np.sum(w * (along < true_along[..., None]), axis=-1),
+        "drift": np.sum(w * (offset < true_offset), axis=-1),
     }
+    # a truth beyond every particle ranks at the weights' float sum, which can exceed 1
+    # by a rounding error and then falls outside a histogram's [0, 1] range
+    return {k: np.clip(v, 0.0, 1.0).ravel() for k, v in ranks.items()}
 
 
 def filter_ranks(batch, n_particles: int | None = None, *, keep, chunk: int = 100,

@@ -58,18 +58,19 @@ step; the filter sees only the network step and its particles' start and end):
 
 With these, the converged filter is calibrated (:mod:`~hippo_probe.baselines.calibration`,
 ``analyses/pf_calibration.py``; ranks of the truth 20 s apart on validation trials,
-darkness world): the rank of the true position and drift among the particles is uniform
-within sampling error (per-time KS) on 300 trials per task at the defaults of the
-generalized and specialized tasks (central 90% holds 0.884-0.903), and on 1,000
-localization trials at 20,000 particles (0.895-0.902). At the localization task's default
-2,000 particles the position posterior is too narrow (central 90% holds 0.870-0.874):
-Monte Carlo error, which shrinks with the particles (0.889 at 5,000) and sits 2-20 s after
-contacts, where the sharp contact likelihood kills most particles and resampling
-duplicates the survivors. The default sizes are set by the error's convergence, not by
-calibration; a study of the posterior itself should run that filter at 20,000 particles.
-Until session 13 the contact's outlier floor went to every particle, deep in the arena
-too, which made the converged filter under-confident at a localization trial's first
-contact (``ContactModelConfig.outlier_near_walls``).
+darkness world): the ranks of the true position and drift among the particles are
+uniform within sampling error (per-time KS) on 300 trials per task at the defaults of the
+generalized and specialized tasks (the 90% region holds 0.884-0.903 of the truths), and
+on 1,000 localization trials at 20,000 particles (0.895-0.902). At the localization
+task's default 2,000 particles the position posterior is too narrow (its 90% region holds
+0.870-0.874): Monte Carlo error, which shrinks with the particles (0.889 at 5,000) and
+sits 2-20 s after contacts, though not made at the contact step itself (splitting the
+particles there, ``ParticleFilterConfig.contact_proposals``, does not remove it). The
+default sizes are set by the error's convergence, not by calibration; a study of the
+posterior itself should run that filter at 20,000 particles. Until session 13 the
+contact's outlier floor went to every particle, deep in the arena too, which made the
+converged filter under-confident at a localization trial's first contact
+(``ContactModelConfig.outlier_near_walls``).
 
 Implementation: one numba kernel per trial (``nogil``), trials spread over a thread pool.
 Particles are stored as separate contiguous ``x``/``y`` arrays, and the wall-distance

@@ -87,10 +87,12 @@ def test_filter_ranks_in_chunks_equal_one_run():
 
 
 def test_outlier_floor_near_walls_only_where_a_contact_could_happen():
-    """At a first contact under a broad posterior (start unknown), the default outlier
-    floor keeps particles far inside the arena; ``outlier_near_walls`` gives weight only
-    to particles whose step could have reached a wall (their end lies within
-    ``2 touch_range + max_speed * network_dt`` of one)."""
+    """At a first contact under a broad posterior (start unknown), the outlier floor given
+    to every particle (``outlier_near_walls=False``, the default before session 13)
+    keeps particles far inside the arena; near walls only (the default), it goes only to
+    particles whose step could have reached a wall (start and end distances to their
+    nearest walls summing to at most ``2 touch_range + max_speed * network_dt``, so no
+    particle ending farther than that from every wall keeps weight)."""
     from hippo_probe.baselines.config import BaselineConfig, ContactModelConfig
     from hippo_probe.world.arena import wall_distance
 
@@ -111,7 +113,7 @@ def test_outlier_floor_near_walls_only_where_a_contact_could_happen():
             mass.append(res.particle_weights[k, b][far].sum())
         beyond[near] = np.array(mass)
     assert (beyond[True] == 0).all()
-    assert beyond[False].max() > 0.01        # the default floor leaves mass out there
+    assert beyond[False].max() > 0.01        # the floor everywhere leaves mass out there
 
 
 def test_split_proposals_keep_more_distinct_particles_through_a_contact():

@@ -3,8 +3,8 @@
 For each task and world, the filter (default size, or ``--particles``) runs on validation
 trials with its particles kept every 20 s; the rank of the true position (Mahalanobis and
 a random projection) and of the true heading drift among the particles should be
-uniform. Prints the fraction of truths in the 90% region (rank < 0.9), the ten decile fractions (0.1 each if calibrated) and
-two Kolmogorov-Smirnov p-values:
+uniform. Prints the fraction of truths in the 90% region (rank < 0.9), the ten decile
+fractions (0.1 each if calibrated) and two Kolmogorov-Smirnov p-values:
 
 - per time: one rank per trial at each kept time (independent across trials, as the KS
   test assumes), the smallest of the 10 p-values times 10 (Bonferroni): the test of

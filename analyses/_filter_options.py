@@ -4,11 +4,13 @@ from hippo_probe.baselines.config import (BaselineConfig, ContactModelConfig,
                                          ParticleFilterConfig)
 
 
-def add_filter_options(parser):
-    """``--particles``, ``--chunk``, ``--outlier-everywhere``, ``--contact-proposals``."""
-    parser.add_argument("--particles", type=int, default=None,
-                        help="particles of the filter (default: the filter's default)")
-    parser.add_argument("--chunk", type=int, default=100, help="trials per filter run")
+def add_filter_options(parser, particles=True):
+    """``--particles`` and ``--chunk`` (unless ``particles`` is False), and the model's
+    ``--outlier-everywhere``, ``--contact-proposals``, ``--regularization``."""
+    if particles:
+        parser.add_argument("--particles", type=int, default=None,
+                            help="particles of the filter (default: the filter's default)")
+        parser.add_argument("--chunk", type=int, default=100, help="trials per filter run")
     parser.add_argument("--outlier-everywhere", action="store_true",
                         help="the contact's outlier floor for every particle, as before "
                              "session 13 (default: only within reach of a wall; "
@@ -16,10 +18,15 @@ def add_filter_options(parser):
     parser.add_argument("--contact-proposals", type=int, default=1,
                         help="moves per particle at a contact step "
                              "(ParticleFilterConfig.contact_proposals)")
+    parser.add_argument("--regularization", type=float, default=0.0,
+                        help="kernel bandwidth after resampling, in units of the "
+                             "posterior's s.d. (ParticleFilterConfig.regularization; "
+                             "default 0: plain resampling)")
 
 
 def baseline_config(args) -> BaselineConfig:
     """The filter configuration the parsed options ask for."""
     return BaselineConfig(
         contact=ContactModelConfig(outlier_near_walls=not args.outlier_everywhere),
-        particle_filter=ParticleFilterConfig(contact_proposals=args.contact_proposals))
+        particle_filter=ParticleFilterConfig(contact_proposals=args.contact_proposals,
+                                             regularization=args.regularization))

@@ -7,6 +7,7 @@ its error, every network / PF ratio would be understated. This runs the filter a
 error at 50 / 100 / 200 s.
 
     python analyses/pf_convergence.py [--trials 50] [--particles 1000 10000] [--out figures/]
+        [--outlier-everywhere] [--contact-proposals M] [--regularization H]
 """
 
 import argparse
@@ -18,6 +19,7 @@ from pathlib import Path
 from hippo_probe._atomic import write_text
 from hippo_probe.baselines import particle_filter
 from hippo_probe.tasks import make_trials
+from _filter_options import add_filter_options, baseline_config
 
 ROOT = Path(__file__).resolve().parents[1]
 TIMES_S = (50, 100, 200)
@@ -31,13 +33,15 @@ def main():
                     default=["localization", "generalized", "specialized"])
     ap.add_argument("--world", default="darkness", choices=["darkness", "compass"])
     ap.add_argument("--out", default=str(ROOT / "figures"))
+    add_filter_options(ap, particles=False)
     a = ap.parse_args()
+    baseline = baseline_config(a)
     rows, table = [], {}
     for task in a.tasks:
         batch = make_trials(task, a.trials, "test", 0, world=a.world)
         for n in a.particles:
             t0 = time.time()
-            err = particle_filter(batch, n).error(batch).mean(axis=1)   # (T,) over trials
+            err = particle_filter(batch, n, baseline=baseline).error(batch).mean(axis=1)   # (T,) over trials
             at = {f"{t}s": float(err[int(round(t / batch.dt)) - 1]) for t in TIMES_S}
             table.setdefault(task, {})[str(n)] = at
             rows.append(f"| {task} | {n:,} | " + " / ".join(f"{v:.3f}" for v in at.values())

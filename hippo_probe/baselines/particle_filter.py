@@ -36,6 +36,9 @@ drift is 0 and never moves. Each network step:
    splits into m children before step 1 (each 1/m of its weight, moving independently),
    and step 4 always resamples back to ``N``: m times the proposals where the
    likelihood is sharpest, at about m times the cost of those ~5% of steps.
+   With ``ParticleFilterConfig.regularization`` = h > 0, each resampling is followed by
+   a Gaussian kernel move of h times the arena's particle covariance (a regularized
+   filter, Musso, Oudjane & Le Gland 2001); off by default (see that attribute).
 
 Approximations of the contact process (the simulator runs at 8 fine steps per network
 step; the filter sees only the network step and its particles' start and end):
@@ -67,7 +70,9 @@ task's default 2,000 particles the position posterior is too narrow (its 90% reg
 sits 2-20 s after contacts, though not made at the contact step itself (splitting the
 particles there, ``ParticleFilterConfig.contact_proposals``, does not remove it). The
 default sizes are set by the error's convergence, not by calibration; a study of the
-posterior itself should run that filter at 20,000 particles. Until session 13 the
+posterior itself should run that filter at 20,000 particles (or with the kernel after
+resampling, ``regularization=0.3``, which calibrates it at 2,000 but blurs multimodal
+posteriors). Until session 13 the
 contact's outlier floor went to every particle, deep in the arena too, which made the
 converged filter under-confident at a localization trial's first contact
 (``ContactModelConfig.outlier_near_walls``).
@@ -81,6 +86,9 @@ results do not depend on batching or thread count.
 
 References
 ----------
+Musso, C., Oudjane, N., & Le Gland, F. (2001). Improving regularised particle filters.
+In Sequential Monte Carlo Methods in Practice (Doucet, de Freitas & Gordon, eds.),
+247-271. Springer.
 Gordon, N. J., Salmond, D. J., & Smith, A. F. M. (1993). Novel approach to
 nonlinear/non-Gaussian Bayesian state estimation. IEE Proc. F 140:107-113.
 Doucet, A., & Johansen, A. M. (2009). A tutorial on particle filtering and smoothing:
@@ -169,7 +177,9 @@ def particle_filter(batch, n_particles: int | None = None, *, start: str | None 
         particles=run["particles"], particle_weights=run["weights"],
         particle_drifts=run["drifts"],
         attrs=provenance("pf", batch, n_particles=n_particles, start=start,
-                         oriented=bool(oriented), **run["diagnostics"]))
+                         oriented=bool(oriented),
+                         regularization=baseline.particle_filter.regularization,
+                         **run["diagnostics"]))
 
 
 def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseline, stream,
@@ -231,7 +241,7 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
             noise.rotation_sd, drift_step_sd, pf.resample_threshold, model.kernel_args(),
             model.heading_sd, model.touch_range, model.min_clearance,
             model.outlier_probability, model.outlier_density, model.outlier_reach, floor,
-            pf.contact_proposals, relative, class_output,
+            pf.contact_proposals, pf.regularization, relative, class_output,
             snapshot_of_step, estimate[b], mean[b], cov[b], drift[b], classes[b], snap_xy[b],
             snap_w[b], snap_eta[b], snap_arena[b])
 
@@ -307,8 +317,9 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
                   distance, angle, path_length, n_checks, speed_sd, rotation_sd,
                   drift_step_sd, resample_threshold, contact_args, heading_sd, touch_range,
                   min_clearance, outlier_p, outlier_density, outlier_reach, floor, proposals,
-                  relative, class_output, snapshot_of_step, out_estimate, out_mean, out_cov,
-                  out_drift, out_class, snap_xy, snap_w, snap_eta, snap_arena):
+                  regularization, relative, class_output, snapshot_of_step, out_estimate,
+                  out_mean, out_cov, out_drift, out_class, snap_xy, snap_w, snap_eta,
+                  snap_arena):
     """One trial of the particle filter (module docstring, steps 1-4). Particles (``x, y``,
     their start ``sx, sy``, heading drift ``eta`` and arena hypothesis ``arena``, sorted)
     are the initial ones; returns (number of skipped observations, number of
@@ -501,10 +512,66 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
             arena, arena2 = arena2, arena
             w, w2 = w2, w
             cur = n
+            if regularization > 0.0:
+                lo = 0
+                for a in range(n_arenas):
+                    hi = lo + alloc[a]
+                    if hi - lo > 1:
+                        _regularize(rng, x[lo:hi], y[lo:hi], eta[lo:hi], regularization,
+                                    walls[a], min_clearance, xp[lo:hi], yp[lo:hi],
+                                    w2[lo:hi], best[lo:hi], nearest[lo:hi],
+                                    crossings[lo:hi])
+                    lo = hi
         if split:
             _snapshot(snapshot_of_step[t], x, y, w, eta, arena, snap_xy, snap_w, snap_eta,
                       snap_arena)
     return n_skipped, n_resampled
+
+
+@numba.njit(cache=True, nogil=True)
+def _regularize(rng, x, y, eta, h, walls, min_clearance, x_old, y_old, eta_old, best,
+                nearest, crossings):
+    r"""Kernel jitter after resampling (regularized particle filter, Musso, Oudjane & Le
+    Gland 2001) of one arena's equally weighted particles: each moves by
+    :math:`h L z`, :math:`z \sim N(0, I_3)`, with :math:`L L^T` the particles' covariance of
+    (x, y, drift); a move that leaves the arena (or comes nearer a wall than
+    ``min_clearance``) is undone. The other arrays are scratch space."""
+    n = x.size
+    m0 = m1 = m2 = 0.0
+    for i in range(n):
+        m0 += x[i]
+        m1 += y[i]
+        m2 += eta[i]
+    m0, m1, m2 = m0 / n, m1 / n, m2 / n
+    c00 = c11 = c22 = c01 = c02 = c12 = 0.0
+    for i in range(n):
+        d0, d1, d2 = x[i] - m0, y[i] - m1, eta[i] - m2
+        c00 += d0 * d0
+        c11 += d1 * d1
+        c22 += d2 * d2
+        c01 += d0 * d1
+        c02 += d0 * d2
+        c12 += d1 * d2
+    # Cholesky of the 3 x 3 covariance; a direction without spread (the compass world's
+    # drift, a single surviving ancestor) gets no jitter
+    l00 = math.sqrt(c00 / n) if c00 > 0.0 else 0.0
+    l10 = c01 / n / l00 if l00 > 0.0 else 0.0
+    l20 = c02 / n / l00 if l00 > 0.0 else 0.0
+    r = c11 / n - l10 * l10
+    l11 = math.sqrt(r) if r > 0.0 else 0.0
+    l21 = (c12 / n - l20 * l10) / l11 if l11 > 0.0 else 0.0
+    r = c22 / n - l20 * l20 - l21 * l21
+    l22 = math.sqrt(r) if r > 0.0 else 0.0
+    for i in range(n):
+        x_old[i], y_old[i], eta_old[i] = x[i], y[i], eta[i]
+        z0, z1, z2 = rng.standard_normal(), rng.standard_normal(), rng.standard_normal()
+        x[i] += h * l00 * z0
+        y[i] += h * (l10 * z0 + l11 * z1)
+        eta[i] += h * (l20 * z0 + l21 * z1 + l22 * z2)
+    _nearest_walls(walls, x, y, best, nearest, crossings)
+    for i in range(n):
+        if int(crossings[i]) % 2 == 0 or best[i] < min_clearance * min_clearance:
+            x[i], y[i], eta[i] = x_old[i], y_old[i], eta_old[i]
 
 
 @numba.njit(cache=True, nogil=True)

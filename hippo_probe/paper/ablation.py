@@ -66,7 +66,8 @@ def make(figures_dir, out, runs=None) -> Path:
                           linestyles="--")
         ax.set_xticks(range(len(labels)), labels, rotation=20, ha="right", fontsize=7)
         ax.axhline(0, color="gray", lw=0.5)
-        ax.set_title(_short(claim.claim), fontsize=8)
+        ax.set_title(claim.title or _short(claim.claim), fontsize=9)
+        ax.set_ylabel(claim.ylabel, fontsize=8)
     for ax in axes.ravel()[n:]:
         ax.set_axis_off()
     # one legend, off the data: in the grid's empty corner (or below the panels)

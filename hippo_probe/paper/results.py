@@ -66,6 +66,8 @@ class Claim(NamedTuple):
     verdict: str                    # by the rule printed with it
     headline: dict                  # label -> number: what the table shows per seed
     study: dict = {}                # label -> the study's number, where it gives one
+    title: str = ""                 # a short panel title for the ablation figure
+    ylabel: str = ""                # what the headline numbers are, with units
 
 
 def rows(fig):
@@ -85,7 +87,8 @@ def rows(fig):
            f"{_fmt(net_loc, '.3f')} m, PF {_fmt(pf_loc, '.3f')} m ({n2} test trials)",
            _verdict(r is not None and r <= 1.2, r is not None and r <= 2,
                     "ratio ≤ 1.2; partly ≤ 2"),
-           {"network / PF, t > 100 s": r}, {"network / PF, t > 100 s": 1.0})
+           {"network / PF, t > 100 s": r}, {"network / PF, t > 100 s": 1.0},
+           "Fig. 2: localization network vs the optimal PF", "error ratio")
 
     gen = _get(f3, "A_generalized_error") or {}
     r = _get(f3, "A_ratio_network_to_pf_t_gt_100s")
@@ -103,7 +106,8 @@ def rows(fig):
            _verdict(bool(beats_pi) and r is not None and r <= 2, bool(beats_pi),
                     "ratio ≤ 2 and error < 0.75 PI at 200 s; partly: only the latter"),
            {"network / PF, t > 100 s": r, "network / PI, 200 s": _ratio(net_200, pi_200)},
-           {"network / PF, t > 100 s": 1.5})
+           {"network / PF, t > 100 s": 1.5},
+           "Fig. 3A: generalized network, novel arenas", "error ratio")
 
     acc = _get(f3, "C_accuracy_at") or {}
     a200 = acc.get("200s")
@@ -114,7 +118,9 @@ def rows(fig):
                                              if acc else "n/a") + f" (chance 0.01; {n3} trials)",
            _verdict(a200 is not None and a200 >= 0.9, a200 is not None and a200 >= 0.5,
                     "≥ 0.9 at 200 s; partly ≥ 0.5"),
-           {"accuracy, 200 s": a200}, {"accuracy, 200 s": 1.0})
+           {"accuracy, 200 s": a200}, {"accuracy, 200 s": 1.0},
+           "Fig. 3C: specialized network names its arena",
+           "classification accuracy (chance 0.01)")
 
     ro = _get(f3, "F_readout_accuracy_at") or {}
     r200 = ro.get("200s")
@@ -125,7 +131,9 @@ def rows(fig):
                                              if ro else "n/a") + f" ({n3} trials)",
            _verdict(r200 is not None and r200 >= 0.7, r200 is not None and r200 >= 0.3,
                     "≥ 0.7 at 200 s; partly ≥ 0.3"),
-           {"accuracy, 200 s": r200}, {"accuracy, 200 s": 0.85})
+           {"accuracy, 200 s": r200}, {"accuracy, 200 s": 0.85},
+           "Fig. 3F: generalized network, retrained readout",
+           "classification accuracy (chance 0.01)")
 
     slam = sorted((int(k.split("_")[2]), v) for k, v in f3.items()
                   if k.startswith("E_pfslam_"))
@@ -154,7 +162,9 @@ def rows(fig):
            {"accuracy − PF-SLAM's": _difference(net.get("accuracy"),
                                                 (top or {}).get("accuracy")),
             "error / PF-SLAM's": _ratio(net.get("error"), (top or {}).get("error"))},
-           {"accuracy − PF-SLAM's": 0.0, "error / PF-SLAM's": 1.0})
+           {"accuracy − PF-SLAM's": 0.0, "error / PF-SLAM's": 1.0},
+           "Fig. 3D-E: specialized network vs PF-SLAM 10k",
+           "accuracy difference; error ratio")
 
     measured = _get(f5, "C_dimension") or {}
     dims = {k: v for k, v in measured.items() if v is not None}
@@ -181,7 +191,9 @@ def rows(fig):
                for e in ("TwoNN", "MLE") if _get(f5, f"C_dimension_{e}")),
            _verdict(bool(close) and all(close), ordered,
                     "each within 20%; partly: the generalized network highest"),
-           {f"D {k}": dims.get(k) for k in paper}, {f"D {k}": v for k, v in paper.items()})
+           {f"D {k}": dims.get(k) for k in paper}, {f"D {k}": v for k, v in paper.items()},
+           "Fig. 5C: correlation dimension of hidden states",
+           "dimension D (Grassberger-Procaccia)")
 
     r2 = _get(f5, "A_r2") or {}
     r2_t = _get(f5, "A_r2_time_in_trial_alone") or {}
@@ -198,7 +210,8 @@ def rows(fig):
                     "R² ≥ 0.5 for xx and yy, ≥ 0.1 above time in trial alone; partly: "
                     "≥ 0.05 above it for one component"),
            {f"R² {k} − time alone": r2[k] - r2_t.get(k, 0.0) if k in r2 else None
-            for k in ("xx", "yy", "xy")})
+            for k in ("xx", "yy", "xy")}, {},
+           "Fig. 5A: PF covariance decoded from units", "cross-validated R² gain")
 
     rho, p = _get(f4, "E", "rank_correlation"), _get(f4, "E", "rank_correlation_p")
     yield Claim("Fig. 4E: units projecting strongly onto the classifier are less spatially "
@@ -207,7 +220,8 @@ def rows(fig):
            f"Spearman rho = {_fmt(rho)} (p = {_fmt(p, '.2g')})",
            _verdict(rho is not None and rho < 0 and p is not None and p < 0.05,
                     rho is not None and rho < 0, "rho < 0 with p < 0.05; partly: rho < 0"),
-           {"Spearman rho": rho})
+           {"Spearman rho": rho}, {},
+           "Fig. 4E: classifier weight vs spatial selectivity", "Spearman ρ")
 
     mvl = _get(f4, "C_mean_vector_length", "median_all_units")
     sig = _get(f4, "C_mean_vector_length", "fraction_significant_p_lt_0.01")
@@ -218,7 +232,8 @@ def rows(fig):
            f"{_fmt(sig)} of units significant (p < 0.01, time-shift shuffles): tuned, "
            "but weakly (mouse ADn cells: median R 0.84, see the network-vs-rodent table)",
            _verdict(mvl is not None and mvl < 0.2, rule="median R < 0.2"),
-           {"median R": mvl})
+           {"median R": mvl}, {},
+           "Fig. 4C: head-direction tuning", "median mean vector length R")
 
     same_a, same_b = (_get(f4, k, "stability_same_arena_median") for k in "AB")
     across_a, across_b = (_get(f4, k, "correlation_across_arenas_median") for k in "AB")
@@ -233,7 +248,8 @@ def rows(fig):
                     "same-arena median ≥ 0.7 and ≥ 0.1 above the other arena's for the "
                     "specialized network; partly: stable only. Smooth gradient-like maps "
                     "are stable trivially (notes)"),
-           {"same arena": same_a, "other arena": across_a})
+           {"same arena": same_a, "other arena": across_a}, {},
+           "Fig. 4A-B: rate-map stability (specialized)", "median rate-map correlation")
 
     d = _get(f4, "D_similarity") or {}
     dc = _get(f4, "D_similarity_units_centred") or {}
@@ -253,7 +269,8 @@ def rows(fig):
                     "population vectors across < 0.3 and within > 0.7, and units' maps "
                     "across arenas < 0.5; partly: population vectors only, i.e. rate "
                     "remapping (units change their mean rate by arena, keep their map)"),
-           {"PV across": across, "maps across": across_a})
+           {"PV across": across, "maps across": across_a}, {},
+           "Fig. 4D: remapping between arenas", "correlation across arenas")
 
 
 def error_table(fig):

@@ -39,6 +39,8 @@ def assert_calibrated(ranks):
 # particles (its 90% region holds 0.867 here, 0.870-0.874 on 300-1,000 validation trials;
 # README, "The baselines in the darkness world"): Monte Carlo error, which 150 trials
 # resolve. Strict, so that a filter which removes it turns this into a failure to look at.
+# (A kernel after resampling removes it, ParticleFilterConfig.regularization = 0.3, but
+# blurs multimodal posteriors; it is not the default.)
 OVERCONFIDENT_AT_DEFAULT = pytest.mark.xfail(
     strict=True, reason="Monte Carlo over-confidence of the default localization filter")
 
@@ -259,6 +261,51 @@ def test_results_and_particles_are_consistent():
     assert (res.cov[..., 2] ** 2 <= res.cov[..., 0] * res.cov[..., 1] + 1e-15).all()
 
 
+def test_kernel_after_resampling_widens_by_its_bandwidth_and_stays_in_the_arena():
+    """The regularization kernel moves equally weighted particles by h times their
+    covariance: the mean stays, the covariance grows by 1 + h^2, and a move out of the
+    arena is undone."""
+    from hippo_probe.baselines.contact import wall_table
+    from hippo_probe.baselines.particle_filter import _regularize
+
+    walls = wall_table(regular_polygon(4, 1.0, np.pi / 4).vertices)   # 1.41 m square
+    rng = np.random.default_rng(0)
+    n, h = 200_000, 0.5
+    cov = np.array([[0.04, 0.01, 0.002], [0.01, 0.02, 0.0], [0.002, 0.0, 0.01]])
+    xyz = rng.multivariate_normal([0.1, -0.1, 0.2], cov, n)
+    x, y, eta = (np.ascontiguousarray(c) for c in xyz.T)
+    scratch = [np.empty(n) for _ in range(6)]
+    _regularize(np.random.default_rng(1), x, y, eta, h, walls, 0.0, *scratch)
+    after = np.stack([x, y, eta])
+    np.testing.assert_allclose(after.mean(axis=1), xyz.mean(axis=0), atol=0.003)
+    np.testing.assert_allclose(np.cov(after), (1 + h * h) * np.cov(xyz.T), atol=0.0015)
+    # near a wall with a wide kernel: every particle stays inside, some moved
+    x, y = np.full(1000, 0.69), np.linspace(-0.3, 0.3, 1000)
+    eta = np.zeros(1000)
+    x0 = x.copy()
+    _regularize(np.random.default_rng(2), x, y, eta, 1.0, walls, 0.0,
+                *[np.empty(1000) for _ in range(6)])
+    assert (np.abs(x) < 0.7071).all() and (np.abs(y) < 0.7071).all()
+    assert 0 < (x != x0).sum() < 1000
+
+
+def test_regularized_filter_runs_the_kernel_and_plain_is_the_default():
+    """``regularization`` = 0 (the default) is the plain filter; a bandwidth changes the
+    particles and is recorded in the result's attrs."""
+    from hippo_probe.baselines.config import BaselineConfig, ParticleFilterConfig
+
+    batch = make_trials("localization", 2, "validation", 0)
+    plain = particle_filter(batch, 300)
+    zero = particle_filter(batch, 300, baseline=BaselineConfig(
+        particle_filter=ParticleFilterConfig(regularization=0.0)))
+    kernel = particle_filter(batch, 300, baseline=BaselineConfig(
+        particle_filter=ParticleFilterConfig(regularization=0.3)))
+    assert plain.attrs["regularization"] == 0 and kernel.attrs["regularization"] == 0.3
+    np.testing.assert_array_equal(plain.mean, zero.mean)
+    assert not np.allclose(plain.mean, kernel.mean)
+    assert np.isfinite(kernel.mean).all() and (kernel.cov[..., :2] >= 0).all()
+
+
 def test_bad_input_is_named():
     batch = make_trials("generalized", 1, "test", 0)
     with pytest.raises(ValueError, match="`n_particles` must be > 0"):
@@ -276,6 +323,8 @@ def test_bad_input_is_named():
         ParticleFilterConfig(contact_proposals=0)
     with pytest.raises(TypeError, match="`outlier_near_walls` must be True or False"):
         ContactModelConfig(outlier_near_walls="yes")
+    with pytest.raises(ValueError, match="`regularization` must be >= 0; got -0.1"):
+        ParticleFilterConfig(regularization=-0.1)
 
 
 def test_a_filter_configuration_that_disagrees_with_the_batch_is_refused():

@@ -99,7 +99,7 @@ class ParticleFilterConfig:
         since session 13) 1,000 / 2,000 / 10,000 particles err 0.109 / 0.102 / 0.109 m,
         0.126 / 0.123 / 0.123 m and 0.126 / 0.130 / 0.125 m at 50 / 100 / 200 s; 2,000
         is kept because the posterior's Monte Carlo over-confidence shrinks with the
-        particles (README, "The baselines in the darkness world").
+        particles (analyses/README.md).
     slam_particles : int
         10,000 particles per trial for PF-SLAM: 100 per arena hypothesis at the start, the
         top of the issue's 100-10,000 range, so the true arena keeps particles until its
@@ -132,7 +132,7 @@ class ParticleFilterConfig:
         sensed distance to ~6 mm) next to one step's motion noise (~1.5 cm), so with one
         move per particle most particles die at a contact and resampling duplicates the
         few survivors: the default filter's position posterior is too narrow 2-20 s after
-        contacts (README, "The baselines in the darkness world"). Costs about ``m``
+        contacts (analyses/README.md). Costs about ``m``
         times a plain step at the ~5% of steps with a contact. Measured (1,000
         validation trials per task, default counts, with ``outlier_near_walls``), m = 10
         barely changes that: the 90% region (rank < 0.9) holds 0.878 (localization, Mahalanobis;

@@ -51,8 +51,7 @@ class FigureConfig:
     name: str = "full"
     trials: int = 200            # test trials per recording
     # oracular particle filter; None: the baselines' defaults, converged in each task
-    # (1,000 particles with a known start, 2,000 with an unknown one: README, "The
-    # baselines in the darkness world")
+    # (1,000 particles with a known start, 2,000 with an unknown one: analyses/README.md)
     particles: int | None = None
     slam_particles: tuple = (100, 1000, 10000)
     slam_trials: int = 50         # PF-SLAM at 10,000 particles: ~30 s on 2 cores

@@ -37,7 +37,7 @@ def assert_calibrated(ranks):
 
 # The localization filter of the darkness world is over-confident at its default 2,000
 # particles (its 90% region holds 0.867 here, 0.870-0.874 on 300-1,000 validation trials;
-# README, "The baselines in the darkness world"): Monte Carlo error, which 150 trials
+# analyses/README.md): Monte Carlo error, which 150 trials
 # resolve. Strict, so that a filter which removes it turns this into a failure to look at.
 # (A kernel after resampling removes it, ParticleFilterConfig.regularization = 0.3, but
 # blurs multimodal posteriors; it is not the default.)

@@ -18,15 +18,18 @@ def add_filter_options(parser, particles=True):
     parser.add_argument("--contact-proposals", type=int, default=1,
                         help="moves per particle at a contact step "
                              "(ParticleFilterConfig.contact_proposals)")
-    parser.add_argument("--regularization", type=float, default=0.0,
+    parser.add_argument("--regularization", type=float, default=None,
                         help="kernel bandwidth after resampling, in units of the "
-                             "posterior's s.d. (ParticleFilterConfig.regularization; "
-                             "default 0: plain resampling)")
+                             "posterior's s.d., with a known and an unknown start "
+                             "(default: ParticleFilterConfig's, 0 and 0.3)")
 
 
 def baseline_config(args) -> BaselineConfig:
     """The filter configuration the parsed options ask for."""
+    h = args.regularization
+    bandwidths = {} if h is None else {"regularization": h,
+                                       "unknown_start_regularization": h}
     return BaselineConfig(
         contact=ContactModelConfig(outlier_near_walls=not args.outlier_everywhere),
         particle_filter=ParticleFilterConfig(contact_proposals=args.contact_proposals,
-                                             regularization=args.regularization))
+                                             **bandwidths))

@@ -140,28 +140,37 @@ class ParticleFilterConfig:
         stays at 0.11-0.13. The over-confidence is therefore not made at the contact
         step itself; it is not the default.
     regularization : float
-        0 (the default): plain resampling. ``h > 0``: after each resampling every
-        particle moves by a Gaussian kernel of ``h`` times its arena's covariance of
-        (x, y, drift) (regularized particle filter, Musso, Oudjane & Le Gland 2001), so
-        that the duplicates of a few survivors spread out again; a move out of the
-        arena, or nearer a wall than ``min_clearance``, is undone. Each resampling then
-        widens the posterior by a factor :math:`\sqrt{1 + h^2}`, which the next
-        observations narrow again. Measured on the same 300 validation trials of the
-        darkness world's localization task (2,000 particles), h = 0 / 0.1 / 0.2 / 0.3
-        put 0.870 / 0.882 / 0.888 / 0.898 of the truths in the Mahalanobis 90% region
-        (per-time KS p 0.005 / 0.014 / 0.045 / 0.12; the drift's 0.902 / 0.899 / 0.906 /
-        0.914, p 0.087 / 0.034 / 0.067 / 0.064), and h = 0.3 errs 0.114 / 0.130 / 0.125
-        m at 50 / 100 / 200 s on the 100 test trials of ``analyses/pf_convergence.py``
-        (plain: 0.102 / 0.123 / 0.130 at 2,000 particles, 0.109 / 0.123 / 0.125 at
-        10,000). 0.3 is about the bandwidth Musso et al. derive for a Gaussian density
-        of ``d`` = 3 dimensions sampled by ``N`` = 2,000 particles,
-        :math:`(4 / (N (d + 2)))^{1/(d + 4)} = 0.33`. It is not the default, because
-        one covariance for the whole cloud blurs a multimodal posterior: with the start
-        heading unknown in a regular pentagon, h = 0.3 leaves a median 0.69 of the mass
-        within 0.1 m of the truth's symmetric copies, where the exact posterior has all
-        of it (``test_unknown_heading_in_a_regular_polygon...``); and in the small
-        arenas, calibrated without it, h = 0.36 (Musso's value for 1,000 particles) makes
-        the filters under-confident (90% regions 0.906-0.919, pooled KS p < 0.02).
+        0 with a known start (the generalized and specialized tasks, and PF-SLAM): plain
+        resampling. ``h > 0``: after each resampling every particle moves by a Gaussian
+        kernel of covariance :math:`h^2 \Sigma` (h times the s.d.), :math:`\Sigma` its
+        arena's particle covariance of (x, y, drift) (regularized particle filter,
+        Musso, Oudjane & Le Gland 2001), so that the duplicates of a few survivors spread
+        out again; a move out of the arena, or nearer a wall than ``min_clearance``, is
+        undone. Away from walls each resampling widens the posterior by a factor
+        :math:`\sqrt{1 + h^2}` (less near walls, where moves are undone), which the next
+        observations narrow again; the kernel does not shrink towards the mean (Liu &
+        West 2001), so part of what it adds is variance. The small-arena filters are
+        calibrated without it, and h = 0.36 (Musso's bandwidth below, for their 1,000
+        particles) makes them under-confident: 90% regions 0.906-0.919, pooled KS
+        p < 0.02, on 300 validation trials each.
+    unknown_start_regularization : float
+        0.3 where the start is unknown (the localization task), with the start heading
+        known (``oriented``; with an unknown one the drift hypotheses span the circle,
+        where a linear kernel on the drift is meaningless, and none is used). The plain
+        filter's position posterior there is too narrow at 2,000 particles (sample
+        impoverishment 2-20 s after contacts). On the same 300 validation trials of the
+        darkness world, h = 0 / 0.1 / 0.2 / 0.3 put 0.870 / 0.882 / 0.888 / 0.898 of the
+        truths in the Mahalanobis 90% region (per-time KS p 0.005 / 0.014 / 0.045 /
+        0.12; the drift's 0.902 / 0.899 / 0.906 / 0.914, p 0.087 / 0.034 / 0.067 /
+        0.064); plain 20,000 particles on the same trials 0.895 (p 0.023). It also
+        brings the error to the converged filter's: on 300 test trials (``analyses/
+        pf_convergence.py``) h = 0.3 errs 0.124 / 0.117 / 0.125 m at 50 / 100 / 200 s,
+        plain 2,000 particles 0.125 / 0.119 / 0.136 and plain 20,000 0.121 / 0.116 /
+        0.125. 0.3 is about the bandwidth Musso et al. derive for a Gaussian density of
+        ``d`` = 3 dimensions sampled by ``N`` = 2,000 particles,
+        :math:`(4 / (N (d + 2)))^{1/(d + 4)} = 0.33`. One covariance for the whole cloud
+        blurs a multimodal posterior; the trials start oriented, so only the position
+        can be multimodal, early in a trial, and the calibration above holds from 10 s.
     """
 
     n_particles: int = 1000
@@ -172,6 +181,7 @@ class ParticleFilterConfig:
     intermediate_checks: int = 1
     contact_proposals: int = 1
     regularization: float = 0.0
+    unknown_start_regularization: float = 0.3
 
     def __post_init__(self):
         check_positive("n_particles", self.n_particles, integer=True)
@@ -183,6 +193,8 @@ class ParticleFilterConfig:
                      low_inclusive=True, integer=True)
         check_positive("contact_proposals", self.contact_proposals, integer=True)
         check_number("regularization", self.regularization, low=0, low_inclusive=True)
+        check_number("unknown_start_regularization", self.unknown_start_regularization,
+                     low=0, low_inclusive=True)
 
 
 @dataclass(frozen=True)

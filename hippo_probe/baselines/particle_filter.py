@@ -36,9 +36,10 @@ drift is 0 and never moves. Each network step:
    splits into m children before step 1 (each 1/m of its weight, moving independently),
    and step 4 always resamples back to ``N``: m times the proposals where the
    likelihood is sharpest, at about m times the cost of those ~5% of steps.
-   With ``ParticleFilterConfig.regularization`` = h > 0, each resampling is followed by
-   a Gaussian kernel move of h times the arena's particle covariance (a regularized
-   filter, Musso, Oudjane & Le Gland 2001); off by default (see that attribute).
+   With an unknown start (``ParticleFilterConfig.unknown_start_regularization`` = 0.3)
+   each resampling is followed by a Gaussian kernel move of covariance
+   :math:`h^2 \Sigma`, :math:`\Sigma` the particles' covariance (a regularized filter,
+   Musso, Oudjane & Le Gland 2001); with a known start, none (``regularization`` = 0).
 
 Approximations of the contact process (the simulator runs at 8 fine steps per network
 step; the filter sees only the network step and its particles' start and end):
@@ -65,14 +66,14 @@ darkness world): the ranks of the true position and drift among the particles ar
 uniform within sampling error (per-time KS) on 300 trials per task at the defaults of the
 generalized and specialized tasks (the 90% region holds 0.884-0.903 of the truths), and
 on 1,000 localization trials at 20,000 particles (0.895-0.902). At the localization
-task's default 2,000 particles the position posterior is too narrow (its 90% region holds
-0.870-0.874): Monte Carlo error, which shrinks with the particles (0.889 at 5,000) and
+task's default 2,000 particles, plain resampling leaves the position posterior too narrow
+(its 90% region holds 0.870-0.874): Monte Carlo error, which shrinks with the particles (0.889 at 5,000) and
 sits 2-20 s after contacts, though not made at the contact step itself (splitting the
 particles there, ``ParticleFilterConfig.contact_proposals``, does not remove it). The
-default sizes are set by the error's convergence, not by calibration; a study of the
-posterior itself should run that filter at 20,000 particles (or with the kernel after
-resampling, ``regularization=0.3``, which calibrates it at 2,000 but blurs multimodal
-posteriors). Until session 13 the
+default sizes are set by the error's convergence; since session 14 the localization
+filter's kernel after resampling (step 4) removes that over-confidence at 2,000
+particles (0.898 in the 90% region) and brings its error to the 20,000-particle
+filter's. Until session 13 the
 contact's outlier floor went to every particle, deep in the arena too, which made the
 converged filter under-confident at a localization trial's first contact
 (``ContactModelConfig.outlier_near_walls``).
@@ -163,34 +164,41 @@ def particle_filter(batch, n_particles: int | None = None, *, start: str | None 
     config = resolve_task(batch, config)
     baseline = baseline or BaselineConfig()
     start = resolve_start(start, config)
+    pf = baseline.particle_filter
+    unknown = start == "unknown"
     if n_particles is None:
-        pf = baseline.particle_filter
-        n_particles = pf.unknown_start_particles if start == "unknown" else pf.n_particles
+        n_particles = pf.unknown_start_particles if unknown else pf.n_particles
     n_particles = check_positive("n_particles", n_particles, integer=True)
+    # the kernel's covariance is linear in the drift: meaningless once the drift
+    # hypotheses span the circle (start heading unknown)
+    regularization = ((pf.unknown_start_regularization if unknown else pf.regularization)
+                      if oriented else 0.0)
     tables = wall_table(batch.arena_vertices)[:, None]           # (B, 1, V, 8)
     run = run_filter(batch, tables, np.arange(len(batch)), n_particles, start, config,
                      baseline, "particle_filter", oriented=oriented, keep=keep,
-                     threads=threads)
+                     threads=threads, regularization=regularization)
     return BaselineResult(
         "pf", run["estimate"], mean=run["mean"], cov=run["cov"],
         drift_mean=run["drift_mean"], drift_sd=run["drift_sd"],
         particles=run["particles"], particle_weights=run["weights"],
         particle_drifts=run["drifts"],
         attrs=provenance("pf", batch, n_particles=n_particles, start=start,
-                         oriented=bool(oriented),
-                         regularization=baseline.particle_filter.regularization,
+                         oriented=bool(oriented), regularization=regularization,
                          **run["diagnostics"]))
 
 
 def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseline, stream,
-               *, oriented=True, keep=(), threads=None, class_output=False):
+               *, oriented=True, keep=(), threads=None, class_output=False,
+               regularization=None):
     """Run the particle kernel on every trial of ``batch``.
 
     ``tables`` (n_tables, A, V, 8) holds wall tables of ``A`` arena hypotheses; trial ``b``
     uses ``tables[table_of_trial[b]]`` and its particles start spread evenly over the
     ``A`` hypotheses (particle ``i`` in arena ``i * A // N``). Particles carry a heading
     drift hypothesis, 0 at the start if ``oriented`` (else uniform on [-pi, pi)),
-    diffusing as the world's drift does. Returns a dict of time-major outputs.
+    diffusing as the world's drift does; ``regularization`` is the bandwidth of the kernel
+    after resampling (default ``ParticleFilterConfig.regularization``). Returns a dict of
+    time-major outputs.
     """
     n_trials, n_steps = len(batch), batch.n_steps
     n_arenas = tables.shape[1]
@@ -203,6 +211,7 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
     threads = check_positive("threads", (os.cpu_count() or 1) if threads is None else threads,
                              integer=True)
     pf = baseline.particle_filter
+    regularization = pf.regularization if regularization is None else regularization
     model = ContactModel.from_config(config.world, baseline.contact)
     noise = config.world.noise
     drift_step_sd = noise.heading_drift * math.sqrt(batch.dt)
@@ -241,7 +250,7 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
             noise.rotation_sd, drift_step_sd, pf.resample_threshold, model.kernel_args(),
             model.heading_sd, model.touch_range, model.min_clearance,
             model.outlier_probability, model.outlier_density, model.outlier_reach, floor,
-            pf.contact_proposals, pf.regularization, relative, class_output,
+            pf.contact_proposals, float(regularization), relative, class_output,
             snapshot_of_step, estimate[b], mean[b], cov[b], drift[b], classes[b], snap_xy[b],
             snap_w[b], snap_eta[b], snap_arena[b])
 
@@ -482,7 +491,8 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
                       snap_arena)
         # 4. resampling, arena by arena (keeps the particles sorted by arena); a split
         # step always returns to n particles
-        if split or 1.0 / sum_w2 < resample_threshold * cur:
+        resampled = split or 1.0 / sum_w2 < resample_threshold * cur
+        if resampled:
             n_resampled += 1
             _allocate(mass, n, floor, rng.random(), alloc)
             out = 0
@@ -512,19 +522,21 @@ def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, con
             arena, arena2 = arena2, arena
             w, w2 = w2, w
             cur = n
-            if regularization > 0.0:
-                lo = 0
-                for a in range(n_arenas):
-                    hi = lo + alloc[a]
-                    if hi - lo > 1:
-                        _regularize(rng, x[lo:hi], y[lo:hi], eta[lo:hi], regularization,
-                                    walls[a], min_clearance, xp[lo:hi], yp[lo:hi],
-                                    w2[lo:hi], best[lo:hi], nearest[lo:hi],
-                                    crossings[lo:hi])
-                    lo = hi
         if split:
             _snapshot(snapshot_of_step[t], x, y, w, eta, arena, snap_xy, snap_w, snap_eta,
                       snap_arena)
+        # the kernel after resampling, arena by arena, once the step's snapshot is taken
+        # (it shows the cloud the step's estimates came from); xp, yp, w2 and the
+        # wall-distance buffers are free until the next step rewrites them
+        if resampled and regularization > 0.0:
+            lo = 0
+            for a in range(n_arenas):
+                hi = lo + alloc[a]
+                if hi - lo > 1:
+                    _regularize(rng, x[lo:hi], y[lo:hi], eta[lo:hi], regularization,
+                                walls[a], min_clearance, xp[lo:hi], yp[lo:hi], w2[lo:hi],
+                                best[lo:hi], nearest[lo:hi], crossings[lo:hi])
+                lo = hi
     return n_skipped, n_resampled
 
 
@@ -533,9 +545,10 @@ def _regularize(rng, x, y, eta, h, walls, min_clearance, x_old, y_old, eta_old, 
                 nearest, crossings):
     r"""Kernel jitter after resampling (regularized particle filter, Musso, Oudjane & Le
     Gland 2001) of one arena's equally weighted particles: each moves by
-    :math:`h L z`, :math:`z \sim N(0, I_3)`, with :math:`L L^T` the particles' covariance of
-    (x, y, drift); a move that leaves the arena (or comes nearer a wall than
-    ``min_clearance``) is undone. The other arrays are scratch space."""
+    :math:`h L z`, :math:`z \sim N(0, I_3)`, with :math:`L L^T = \Sigma` the particles'
+    covariance of (x, y, drift), i.e. a Gaussian kernel of covariance :math:`h^2 \Sigma`; a
+    move that leaves the arena (or comes nearer a wall than ``min_clearance``) is undone.
+    The other arrays are scratch space."""
     n = x.size
     m0 = m1 = m2 = 0.0
     for i in range(n):

@@ -94,4 +94,6 @@ def pf_slam(batch, n_particles: int | None = None, *, keep=(), threads: int | No
         particle_weights=run["weights"], particle_drifts=run["drifts"],
         particle_arenas=run["arenas"],
         attrs=provenance("pfslam", batch, n_particles=n_particles,
-                         n_arenas=int(tables.shape[1]), **run["diagnostics"]))
+                         n_arenas=int(tables.shape[1]),
+                         regularization=baseline.particle_filter.regularization,
+                         **run["diagnostics"]))

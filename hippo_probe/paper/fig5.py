@@ -122,8 +122,9 @@ def make(cfg, out):
         slope.set_ylabel("d log C / d log r", color="tab:orange")
         handles = a.get_legend_handles_labels()
         extra = slope.get_legend_handles_labels()
+        # below the axes: inside, every corner meets the slope's curve in some run
         a.legend(handles[0] + extra[0], handles[1] + extra[1], frameon=False, fontsize=7,
-                 loc="upper left")
+                 loc="upper center", bbox_to_anchor=(0.5, -0.2), ncols=2)
         numbers.setdefault("C_dimension", {})[name] = float(res.attrs["dimension"])
         numbers.setdefault("C_n_points", {})[name] = int(res.attrs["n_points"])
         for e, v in nn_d.items():

@@ -263,7 +263,7 @@ def plot_errors(ds, ax=None):
 
     errors = localization_errors(ds)
     if ax is None:
-        fig, ax = plt.subplots(figsize=(5.5, 3.8), constrained_layout=True)
+        fig, ax = plt.subplots(figsize=(7.5, 3.8), constrained_layout=True)
     else:
         fig = ax.figure
     for name in errors["baseline"].values:
@@ -274,7 +274,8 @@ def plot_errors(ds, ax=None):
     ax.set_ylim(bottom=0)
     ax.set_title(f"{ds.attrs.get('task', '')} · {ds.attrs.get('world', 'compass')} world · "
                  f"{ds.sizes['trial_id']} {ds.attrs.get('split', '')} trials")
-    ax.legend(fontsize=8, frameon=False)
+    # beside the axes: inside, some curve crosses every corner in one task or another
+    ax.legend(fontsize=8, frameon=False, loc="center left", bbox_to_anchor=(1.01, 0.5))
     return fig
 
 

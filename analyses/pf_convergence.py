@@ -41,7 +41,8 @@ def main():
         batch = make_trials(task, a.trials, "test", 0, world=a.world)
         for n in a.particles:
             t0 = time.time()
-            err = particle_filter(batch, n, baseline=baseline).error(batch).mean(axis=1)   # (T,) over trials
+            res = particle_filter(batch, n, baseline=baseline)
+            err = res.error(batch).mean(axis=1)                          # (T,) over trials
             at = {f"{t}s": float(err[int(round(t / batch.dt)) - 1]) for t in TIMES_S}
             table.setdefault(task, {})[str(n)] = at
             rows.append(f"| {task} | {n:,} | " + " / ".join(f"{v:.3f}" for v in at.values())

@@ -66,17 +66,16 @@ darkness world): the ranks of the true position and drift among the particles ar
 uniform within sampling error (per-time KS) on 300 trials per task at the defaults of the
 generalized and specialized tasks (the 90% region holds 0.884-0.903 of the truths), and
 on 1,000 localization trials at 20,000 particles (0.895-0.902). At the localization
-task's default 2,000 particles, plain resampling leaves the position posterior too narrow
-(its 90% region holds 0.870-0.874): Monte Carlo error, which shrinks with the particles (0.889 at 5,000) and
-sits 2-20 s after contacts, though not made at the contact step itself (splitting the
-particles there, ``ParticleFilterConfig.contact_proposals``, does not remove it). The
-default sizes are set by the error's convergence; since session 14 the localization
-filter's kernel after resampling (step 4) removes that over-confidence at 2,000
-particles (0.898 in the 90% region) and brings its error to the 20,000-particle
-filter's. Until session 13 the
-contact's outlier floor went to every particle, deep in the arena too, which made the
-converged filter under-confident at a localization trial's first contact
-(``ContactModelConfig.outlier_near_walls``).
+task's default 2,000 particles, plain resampling leaves the position posterior too
+narrow (its 90% region holds 0.870-0.874): Monte Carlo error, which shrinks with the
+particles (0.889 at 5,000) and sits 2-20 s after contacts, though not made at the
+contact step itself (splitting the particles there,
+``ParticleFilterConfig.contact_proposals``, does not remove it). Since session 14 the
+localization filter's kernel after resampling (step 4) removes that over-confidence at
+2,000 particles (0.898 in the 90% region) and brings its error to the 20,000-particle
+filter's. Until session 13 the contact's outlier floor went to every particle, deep in
+the arena too, which made the converged filter under-confident at a localization
+trial's first contact (``ContactModelConfig.outlier_near_walls``).
 
 Implementation: one numba kernel per trial (``nogil``), trials spread over a thread pool.
 Particles are stored as separate contiguous ``x``/``y`` arrays, and the wall-distance

@@ -66,7 +66,7 @@ def make(figures_dir, out, runs=None) -> Path:
                           linestyles="--")
         ax.set_xticks(range(len(labels)), labels, rotation=20, ha="right", fontsize=7)
         ax.axhline(0, color="gray", lw=0.5)
-        ax.set_title(claim.title or _short(claim.claim), fontsize=9)
+        ax.set_title(claim.title or claim.claim, fontsize=9)
         ax.set_ylabel(claim.ylabel, fontsize=8)
     for ax in axes.ravel()[n:]:
         ax.set_axis_off()
@@ -93,9 +93,3 @@ def make(figures_dir, out, runs=None) -> Path:
     print(f"  wrote {out / 'ablation'}.png/.pdf/.json")
     return png
 
-
-def _short(claim: str) -> str:
-    """The claim's figure panel and its first words, for a panel title."""
-    panel, _, text = claim.partition(": ")
-    words = text.split()
-    return f"{panel}: {' '.join(words[:7])}{' …' if len(words) > 7 else ''}"

@@ -48,10 +48,13 @@ readout() {                     # SEED: softmax readout on the frozen generalize
     --validation-trials 300
 }
 
+# specialized_s2 sits in lane A so that the lanes end near each other: at session 15's
+# start lane A held only localization_s2 (~6,000 steps left: the 1% rule ended seeds 0
+# and 1 at 11,750), lane B ~94,000 steps
 lane_a() { network generalized 0 && readout 0; network localization 0; network generalized 1 \
-           && readout 1; network localization 2; }
+           && readout 1; network localization 2; network specialized 2; }
 lane_b() { network specialized 0; network localization 1; network specialized 1; \
-           network generalized 2 && readout 2; network specialized 2; }
+           network generalized 2 && readout 2; }
 
 lane_a > logs/queue_a.log 2>&1 &
 lane_b > logs/queue_b.log 2>&1 &

@@ -5,8 +5,11 @@ every step, backward, and an Adam update — what one optimizer step of training
 Peer: ``torch.nn.LSTM`` in float32 (fused C++ kernel, no peepholes); also the peer under
 ``torch.autocast("cpu", dtype=torch.bfloat16)``, the stock way to use the CPU's bf16
 units. Ours: ``PeepholeLSTM(precision="bf16")`` (matmuls in bf16 on AMX, state and
-optimizer in float32) and ``PeepholeLSTM()`` (float32). Optional: a naive per-step Python
-loop with peepholes under autograd (``unbind``), the obvious alternative.
+optimizer in float32) and ``PeepholeLSTM()`` (float32, the fused training kernels), and
+the float32 gate-major Function the fused kernels replaced in training ("unfused").
+Optional: a naive per-step Python loop with peepholes under autograd (``unbind``), the
+obvious alternative. On a CPU without bf16 units (no AVX512-BF16 or AMX), where oneDNN
+emulates bf16 ~20x slower, the bf16 rows are left out unless ``--bf16`` asks for them.
 
 Beside the times: the matmul GFLOP/s our step achieves — the FLOPs of all its matmuls,
 2 T B (F+H) 4H forward and twice that backward, over the step's time — against a plain
@@ -19,9 +22,10 @@ ceiling for this work).
 
 ``--plot`` saves bar charts (one panel per batch) of the median time per training step of
 each implementation at each thread count, labelled with its throughput relative to
-torch.nn.LSTM float32. ``--concurrent S`` also runs the bf16 step for S seconds as one
-process at 2 threads and as two processes at 1 thread side by side, and prints the total
-sequences per second of each (which uses two cores better). ``--quick`` is a smoke run
+torch.nn.LSTM float32. ``--concurrent S`` also runs the training step (bf16 where the CPU
+has bf16 units, else float32) for S seconds as one process at 2 threads and as two
+processes at 1 thread side by side, and prints the total sequences per second of each
+(which uses two cores better). ``--quick`` is a smoke run
 (short sequences, small batches, one repeat).
 """
 
@@ -39,7 +43,8 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 import torch
 from torch import nn
 
-from hippo_probe.model.lstm import PeepholeLSTM
+from hippo_probe.model.config import native_bf16
+from hippo_probe.model.lstm import PeepholeLSTM, _PeepholeLSTMFunction
 from hippo_probe.training.memory import reuse_freed_memory
 
 PEER = "torch.nn.LSTM fp32 (peer)"
@@ -68,12 +73,23 @@ class NaiveLoop(nn.Module):
         return torch.stack(out), None
 
 
-def implementations(f, h, naive=False):
+class Unfused(PeepholeLSTM):
+    """PeepholeLSTM training through the gate-major float32 Function (its inference path)."""
+
+    def forward(self, x):
+        h0 = x.new_zeros(x.shape[1], self.hidden_size)
+        return _PeepholeLSTMFunction.apply(x, h0, h0, self.weight_x, self.weight_h, self.bias,
+                                           self.weight_peephole)[0], None
+
+
+def implementations(f, h, naive=False, bf16=True):
     """name -> (core module, autocast?)."""
     rows = {PEER: (nn.LSTM(f, h), False),
-            "torch.nn.LSTM autocast bf16": (nn.LSTM(f, h), True),
             "hippo_probe PeepholeLSTM fp32": (PeepholeLSTM(f, h), False),
-            "hippo_probe PeepholeLSTM bf16": (PeepholeLSTM(f, h, precision="bf16"), False)}
+            "hippo_probe fp32 unfused": (Unfused(f, h), False)}
+    if bf16:
+        rows["torch.nn.LSTM autocast bf16"] = (nn.LSTM(f, h), True)
+        rows["hippo_probe PeepholeLSTM bf16"] = (PeepholeLSTM(f, h, precision="bf16"), False)
     if naive:
         rows["naive per-step loop (unbind)"] = (NaiveLoop(f, h), False)
     return rows
@@ -168,11 +184,11 @@ def plot(results, batches, threads, path, title):
 
 
 def _worker(a):
-    """Run the bf16 step for --seconds; print the sequences done and the seconds taken."""
+    """Run the training step for --worker seconds; print the sequences done and the seconds."""
     torch.set_num_threads(a.threads[0])
     x = torch.randn(a.steps, a.batch[0], a.features)
     y = torch.randn(a.steps, a.batch[0], 2)
-    step = make_step(PeepholeLSTM(a.features, a.hidden, precision="bf16"),
+    step = make_step(PeepholeLSTM(a.features, a.hidden, precision=a.worker_precision),
                      nn.Linear(a.hidden, 2), x, y)
     step()
     n, t0 = 0, time.perf_counter()
@@ -182,20 +198,20 @@ def _worker(a):
     print(n * a.batch[0], time.perf_counter() - t0)
 
 
-def concurrent(a, seconds, batch):
-    """Total sequences/s of the bf16 step: one process at 2 threads vs two at 1 thread."""
+def concurrent(a, seconds, batch, precision):
+    """Total sequences/s of the training step: one process at 2 threads vs two at 1."""
     def launch(threads):
         env = dict(os.environ, OMP_NUM_THREADS=str(threads), OMP_WAIT_POLICY="PASSIVE")
         cmd = [sys.executable, __file__, "--worker", str(seconds), "--threads",
                str(threads), "--batch", str(batch), "--steps", str(a.steps), "--hidden",
-               str(a.hidden), "--features", str(a.features)]
+               str(a.hidden), "--features", str(a.features), "--worker-precision", precision]
         return subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, text=True)
 
     def total(procs):
         out = [p.communicate()[0].split() for p in procs]
         return sum(int(n) / float(s) for n, s in out)
 
-    print(f"\nbf16 training step, batch {batch}, {seconds:g} s each "
+    print(f"\n{precision} training step, batch {batch}, {seconds:g} s each "
           f"(load avg {os.getloadavg()[0]:.2f} before):")
     one = total([launch(2)])
     print(f"  one process at 2 threads:        {one:7.1f} seq/s  "
@@ -219,7 +235,10 @@ def main():
     ap.add_argument("--concurrent", type=float, default=0, metavar="S",
                     help="also compare 1 process x 2 threads with 2 x 1 for S seconds")
     ap.add_argument("--quick", action="store_true", help="smoke run: T=50, small batches")
+    ap.add_argument("--bf16", action="store_true",
+                    help="time the bf16 rows even where the CPU emulates bf16 (slow)")
     ap.add_argument("--worker", type=float, default=0, help=argparse.SUPPRESS)
+    ap.add_argument("--worker-precision", default="bf16", help=argparse.SUPPRESS)
     a = ap.parse_args()
     reuse_freed_memory()     # as `fit` does: every implementation's activations reused
     if a.worker:
@@ -228,6 +247,9 @@ def main():
         a.steps, a.batch, a.repeats = 50, [16, 32], 1
         a.concurrent = min(a.concurrent, 2)
     torch.manual_seed(0)
+    bf16 = a.bf16 or native_bf16()
+    if not bf16:
+        print("no bf16 units on this CPU (bf16 would be emulated): bf16 rows left out")
     load = os.getloadavg()[0]
     T, F, H = a.steps, a.features, a.hidden
     all_results = {}
@@ -241,27 +263,27 @@ def main():
                   f"thread{'s' * (threads > 1)}, OMP_WAIT_POLICY "
                   f"{os.environ['OMP_WAIT_POLICY']}, load avg {os.getloadavg()[0]:.2f}")
             results = {}
-            for name, (core, autocast) in implementations(F, H, a.naive).items():
+            for name, (core, autocast) in implementations(F, H, a.naive, bf16).items():
                 step = make_step(core, nn.Linear(H, 2), x, y, autocast)
                 results[name] = time_step(step, a.repeats)
             ceiling = {d: matmul_ceiling(T, batch, F, H, d, a.repeats)
-                       for d in (torch.bfloat16, torch.float32)}
+                       for d in (torch.bfloat16, torch.float32)[not bf16:]}
             flops = step_flops(T, batch, F, H)
             peer = results[PEER][1]
             print(f"{'':32s} {'best s':>7s} {'median s':>8s} {'seq/s':>7s} "
                   f"{'vs peer':>7s} {'matmul GFLOP/s (of ceiling)':>28s}")
             for name, (best, med) in results.items():
-                dtype = {"fp32": torch.float32, "bf16": torch.bfloat16}.get(name[-4:])
+                dtype = torch.bfloat16 if "bf16" in name else torch.float32
                 gf = "" if not name.startswith("hippo_probe") else \
                     f"{flops / med / 1e9:9.0f} of {ceiling[dtype]:5.0f} " \
                     f"({flops / med / 1e9 / ceiling[dtype]:4.0%})"
                 print(f"{name:32s} {best:7.3f} {med:8.3f} {batch / med:7.1f} "
                       f"{peer / med:6.2f}x {gf:>28s}")
-            print(f"{'plain matmuls of these shapes':32s} bf16 {ceiling[torch.bfloat16]:.0f}"
-                  f" GFLOP/s, fp32 {ceiling[torch.float32]:.0f} GFLOP/s (the ceilings)")
+            print(f"{'plain matmuls of these shapes':32s} " + ", ".join(
+                f"{str(d)[6:]} {c:.0f} GFLOP/s" for d, c in ceiling.items()) + " (the ceilings)")
             all_results[batch][threads] = results
     if a.concurrent:
-        concurrent(a, a.concurrent, a.batch[0])
+        concurrent(a, a.concurrent, a.batch[0], "bf16" if bf16 else "fp32")
     if a.plot:
         plot(all_results, a.batch, a.threads, a.plot,
              f"one Adam step: {T} steps x {H} units, {F} inputs "

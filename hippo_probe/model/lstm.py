@@ -18,9 +18,11 @@ steps is one matmul); the backward pass precomputes every elementwise derivative
 for all steps at once, so its sequential loop is five kernels per step; the weight
 gradients are then one large matmul each. See ``benchmarks/bench_lstm.py``.
 
-A second Function, the bf16 path (``PeepholeLSTM(precision="bf16")``), runs the same math
-with its matmuls in bfloat16 on the CPU's AMX units and the rest in float32, for training;
-see :class:`_PeepholeLSTMBF16Function`.
+A second Function, the fused training path (:class:`_FusedPeepholeLSTMFunction`), runs the
+same math with each step's elementwise work in one numba kernel, for training on the CPU:
+in float32, or with its matmuls in bfloat16 on the CPU's AMX units and the rest in float32
+(``PeepholeLSTM(precision="bf16")``). Inference (under ``torch.no_grad()``) always takes
+the first Function.
 
 References
 ----------
@@ -167,16 +169,27 @@ class _PeepholeLSTMFunction(torch.autograd.Function):
         return d_x, dh0, dc, d_w_x, d_w_h4.view(4 * H, H), d_bias, d_w_peep
 
 
-# --- bf16 path -------------------------------------------------------------------------
+# --- the fused training path -----------------------------------------------------------
 #
-# Matmuls run in bfloat16 on the CPU's AMX units; everything else stays float32. torch's
-# CPU matmuls cannot write a float32 result from bf16 operands, so each product comes back
-# rounded to bf16 (after float32 accumulation inside oneDNN) and is widened before it
-# touches the state. The elementwise work of a step is ONE fused numba kernel (forward) and
-# ONE (backward) instead of ~12 and ~5 torch kernels: with the matmuls on AMX, those
-# kernels' launches and memory passes were most of a step. bf16 values cross into numba as
-# int16 bit patterns (numba has no bfloat16): widening is a 16-bit shift, narrowing rounds
-# to nearest even, as torch's own cast does.
+# For training on the CPU the elementwise work of a step is ONE fused numba kernel
+# (forward) and ONE (backward) instead of ~12 and ~5 torch kernels, in a batch-major layout
+# where a step's input projection and recurrence are ONE matmul. Two flavours share the
+# per-row math (``_forward_row``, ``_backward_row``):
+#
+# * bf16 (``PeepholeLSTM(precision="bf16")``): matmuls in bfloat16 on the CPU's AMX units,
+#   everything else float32. torch's CPU matmuls cannot write a float32 result from bf16
+#   operands, so each product comes back rounded to bf16 (after float32 accumulation inside
+#   oneDNN) and is widened before it touches the state. bf16 values cross into numba as
+#   int16 bit patterns (numba has no bfloat16): widening is a 16-bit shift, narrowing rounds
+#   to nearest even, as torch's own cast does.
+# * float32 (the default precision's training path on the CPU): the same with float32
+#   matmuls. On an AVX2 machine (no AVX-512) its training step took 1.3x less time than
+#   the gate-major Function above, whose ~17 elementwise torch kernels a step were a third
+#   of it (``benchmarks/bench_lstm.py``, "fp32 unfused"); it differs from that Function
+#   only in rounding (the rational tanh below, the order of sums), ~3e-7 relative.
+#
+# The gate-major Function above stays the inference path (record, evaluation: bit for bit
+# what it always computed) and the float64 / GPU path.
 
 #: Coefficients of the [13/6] rational approximation of tanh on [-7.9988, 7.9988] used by
 #: Eigen (``generic_fast_tanh_float``): max abs error 3.4e-7 against float64 tanh, relative
@@ -231,6 +244,68 @@ def _narrow(u32, out_bits):
         out_bits[j] = (u + 0x7FFF + ((u >> 16) & 1)) >> 16
 
 
+@numba.njit(fastmath=True, cache=True, inline="always", error_model="numpy")
+def _forward_row(z, bias, w_peep, c, gates_tb, c_new, tc, h):
+    """One sequence's step: gates, cell and h from its pre-activation product row z (4H,).
+
+    One short loop per quantity over the H units, on purpose: LLVM vectorises a loop only
+    when it can check cheaply that its arrays don't overlap, and one loop writing all seven
+    outputs stayed scalar (4.7x slower).
+    """
+    H = c.shape[0]
+    zi, zf, zg, zo = z[:H], z[H:2 * H], z[2 * H:3 * H], z[3 * H:]
+    b_i, b_f, b_g, b_o = bias[0], bias[1], bias[2], bias[3]
+    w_i, w_f, w_o = w_peep[0], w_peep[1], w_peep[2]
+    i, f, g, o = gates_tb[0], gates_tb[1], gates_tb[2], gates_tb[3]
+    for j in range(H):
+        i[j] = _sigmoid(zi[j] + b_i[j] + w_i[j] * c[j])
+    for j in range(H):
+        f[j] = _sigmoid(zf[j] + b_f[j] + w_f[j] * c[j])
+    for j in range(H):
+        g[j] = _tanh(zg[j] + b_g[j])
+    for j in range(H):
+        c_new[j] = f[j] * c[j] + i[j] * g[j]
+    for j in range(H):
+        o[j] = _sigmoid(zo[j] + b_o[j] + w_o[j] * c_new[j])
+    for j in range(H):
+        tc[j] = _tanh(c_new[j])
+    for j in range(H):
+        h[j] = o[j] * tc[j]
+
+
+@numba.njit(fastmath=True, cache=True, inline="always", error_model="numpy")
+def _backward_row(dh, gates_tb, tc, c_prev, c, dc, w_peep, dz, dct, d_bias, d_peep):
+    """One sequence's backward step: pre-activation gradients dz (4H,: i, f, g, o) from
+    ``dh``; ``dc`` goes from dc_t to dc_{t-1} in place; dz is added into the bias and
+    peephole gradients. ``dct`` is scratch (H,). Short loops, as in :func:`_forward_row`.
+    """
+    H = c.shape[0]
+    di, df, dg, do = dz[:H], dz[H:2 * H], dz[2 * H:3 * H], dz[3 * H:]
+    i, f, g, o = gates_tb[0], gates_tb[1], gates_tb[2], gates_tb[3]
+    w_i, w_f, w_o = w_peep[0], w_peep[1], w_peep[2]
+    p_i, p_f, p_o = d_peep[0], d_peep[1], d_peep[2]
+    for j in range(H):
+        do[j] = dh[j] * tc[j] * o[j] * (_ONE - o[j])
+    for j in range(H):
+        dct[j] = dc[j] + dh[j] * o[j] * (_ONE - tc[j] * tc[j]) + do[j] * w_o[j]
+    for j in range(H):
+        di[j] = dct[j] * g[j] * i[j] * (_ONE - i[j])
+    for j in range(H):
+        df[j] = dct[j] * c_prev[j] * f[j] * (_ONE - f[j])
+    for j in range(H):
+        dg[j] = dct[j] * i[j] * (_ONE - g[j] * g[j])
+    for j in range(H):
+        dc[j] = dct[j] * f[j] + di[j] * w_i[j] + df[j] * w_f[j]
+    for j in range(4 * H):
+        d_bias[j] += dz[j]
+    for j in range(H):
+        p_i[j] += di[j] * c_prev[j]
+    for j in range(H):
+        p_f[j] += df[j] * c_prev[j]
+    for j in range(H):
+        p_o[j] += do[j] * c[j]
+
+
 @numba.njit(fastmath=True, cache=True, error_model="numpy")
 def _bf16_forward_step(t, z_bits, bias, w_peep, gates, cells, tanh_cells, hidden, xh_bits):
     """Step t's gates and state from its pre-activation product ``z`` (bf16, (B, 4H)).
@@ -238,48 +313,39 @@ def _bf16_forward_step(t, z_bits, bias, w_peep, gates, cells, tanh_cells, hidden
     Writes gates[t] (post-activation, (B, 4, H)), cells[t + 1], tanh_cells[t],
     hidden[t + 1] (float32) and, if another step follows, h_t's bf16 bits into
     ``xh_bits[t + 1, :, F:]`` (the next product's operand).
-
-    One short loop per quantity over a row's H units, on purpose: LLVM vectorises a loop
-    only when it can check cheaply that its arrays don't overlap, and one loop writing
-    all seven outputs stayed scalar (4.7x slower).
     """
     _, B, _, H = gates.shape
     F = xh_bits.shape[2] - H
     z_u = np.empty(4 * H, np.uint32)
-    z = z_u.view(np.float32)
-    zi, zf, zg, zo = z[:H], z[H:2 * H], z[2 * H:3 * H], z[3 * H:]
     h_u = np.empty(H, np.uint32)
     h_f = h_u.view(np.float32)
-    b_i, b_f, b_g, b_o = bias[0], bias[1], bias[2], bias[3]
-    w_i, w_f, w_o = w_peep[0], w_peep[1], w_peep[2]
     for b in range(B):
         _widen(z_bits[b], z_u)
-        c = cells[t, b]
-        i, f, g, o = gates[t, b, 0], gates[t, b, 1], gates[t, b, 2], gates[t, b, 3]
-        c_new, tc, h = cells[t + 1, b], tanh_cells[t, b], hidden[t + 1, b]
-        for j in range(H):
-            i[j] = _sigmoid(zi[j] + b_i[j] + w_i[j] * c[j])
-        for j in range(H):
-            f[j] = _sigmoid(zf[j] + b_f[j] + w_f[j] * c[j])
-        for j in range(H):
-            g[j] = _tanh(zg[j] + b_g[j])
-        for j in range(H):
-            c_new[j] = f[j] * c[j] + i[j] * g[j]
-        for j in range(H):
-            o[j] = _sigmoid(zo[j] + b_o[j] + w_o[j] * c_new[j])
-        for j in range(H):
-            tc[j] = _tanh(c_new[j])
-        for j in range(H):
-            h[j] = o[j] * tc[j]
+        h = hidden[t + 1, b]
+        _forward_row(z_u.view(np.float32), bias, w_peep, cells[t, b], gates[t, b],
+                     cells[t + 1, b], tanh_cells[t, b], h)
         if t + 1 < xh_bits.shape[0]:
             h_f[:] = h
             _narrow(h_u, xh_bits[t + 1, b, F:])
 
 
 @numba.njit(fastmath=True, cache=True, error_model="numpy")
+def _fp32_forward_step(t, z, bias, w_peep, gates, cells, tanh_cells, hidden, xh):
+    """:func:`_bf16_forward_step` with a float32 product ``z`` and operand buffer ``xh``."""
+    _, B, _, H = gates.shape
+    F = xh.shape[2] - H
+    for b in range(B):
+        h = hidden[t + 1, b]
+        _forward_row(z[b], bias, w_peep, cells[t, b], gates[t, b], cells[t + 1, b],
+                     tanh_cells[t, b], h)
+        if t + 1 < xh.shape[0]:
+            xh[t + 1, b, F:] = h
+
+
+@numba.njit(fastmath=True, cache=True, error_model="numpy")
 def _bf16_backward_step(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec_bits,
                         use_rec, dc, dg_bits, d_bias, d_peep):
-    """Step t of the backward recurrence, fused (short loops, as in the forward step).
+    """Step t of the backward recurrence, fused.
 
     ``dh = d_hidden[t] + rec``; rec is the bf16 product dg_{t+1} W_h, or at the last step
     (``use_rec`` False) ``d_hn``, the gradient of the returned final h (float32). Updates
@@ -292,49 +358,45 @@ def _bf16_backward_step(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec
     rec = rec_u.view(np.float32)
     dz_u = np.empty(4 * H, np.uint32)
     dz = dz_u.view(np.float32)
-    di, df, dg, do = dz[:H], dz[H:2 * H], dz[2 * H:3 * H], dz[3 * H:]
     dh = np.empty(H, np.float32)
     dct = np.empty(H, np.float32)
-    w_i, w_f, w_o = w_peep[0], w_peep[1], w_peep[2]
-    p_i, p_f, p_o = d_peep[0], d_peep[1], d_peep[2]
     d_bias = d_bias.reshape(4 * H)
     for b in range(B):
         if use_rec:
             _widen(rec_bits[b], rec_u)
         else:
             rec[:] = d_hn[b]
-        i, f, g, o = gates[t, b, 0], gates[t, b, 1], gates[t, b, 2], gates[t, b, 3]
-        tc, c_prev, c, dcb = tanh_cells[t, b], cells[t, b], cells[t + 1, b], dc[b]
         dhb = d_hidden[t, b]
         for j in range(H):
             dh[j] = dhb[j] + rec[j]
-        for j in range(H):
-            do[j] = dh[j] * tc[j] * o[j] * (_ONE - o[j])
-        for j in range(H):
-            dct[j] = dcb[j] + dh[j] * o[j] * (_ONE - tc[j] * tc[j]) + do[j] * w_o[j]
-        for j in range(H):
-            di[j] = dct[j] * g[j] * i[j] * (_ONE - i[j])
-        for j in range(H):
-            df[j] = dct[j] * c_prev[j] * f[j] * (_ONE - f[j])
-        for j in range(H):
-            dg[j] = dct[j] * i[j] * (_ONE - g[j] * g[j])
-        for j in range(H):
-            dcb[j] = dct[j] * f[j] + di[j] * w_i[j] + df[j] * w_f[j]
-        for j in range(4 * H):
-            d_bias[j] += dz[j]
-        for j in range(H):
-            p_i[j] += di[j] * c_prev[j]
-        for j in range(H):
-            p_f[j] += df[j] * c_prev[j]
-        for j in range(H):
-            p_o[j] += do[j] * c[j]
+        _backward_row(dh, gates[t, b], tanh_cells[t, b], cells[t, b], cells[t + 1, b], dc[b],
+                      w_peep, dz, dct, d_bias, d_peep)
         _narrow(dz_u, dg_bits[t, b])
 
 
-def _bf16_forward_step_torch(t, z, bias, w_peep, gates, cells, tanh_cells, hidden, xh):
-    """:func:`_bf16_forward_step` with torch ops on bf16 tensors (non-CPU devices)."""
+@numba.njit(fastmath=True, cache=True, error_model="numpy")
+def _fp32_backward_step(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec, use_rec,
+                        dc, d_gates, d_bias, d_peep):
+    """:func:`_bf16_backward_step` with a float32 product ``rec``, writing float32
+    pre-activation gradients into ``d_gates[t]``."""
+    _, B, _, H = gates.shape
+    dh = np.empty(H, np.float32)
+    dct = np.empty(H, np.float32)
+    d_bias = d_bias.reshape(4 * H)
+    for b in range(B):
+        r = rec[b] if use_rec else d_hn[b]
+        dhb = d_hidden[t, b]
+        for j in range(H):
+            dh[j] = dhb[j] + r[j]
+        _backward_row(dh, gates[t, b], tanh_cells[t, b], cells[t, b], cells[t + 1, b], dc[b],
+                      w_peep, d_gates[t, b], dct, d_bias, d_peep)
+
+
+def _forward_step_torch(t, z, bias, w_peep, gates, cells, tanh_cells, hidden, xh):
+    """The forward step kernels' math with torch ops, any dtype and device (the GPU path;
+    the reference the numba kernels are tested against)."""
     B, H = cells.shape[1:]
-    zf = z.view(B, 4, H).float() + bias.view(4, H)
+    zf = z.view(B, 4, H).to(cells.dtype) + bias.view(4, H)
     c = cells[t]
     i_f = torch.sigmoid(zf[:, :2] + w_peep[:2] * c.unsqueeze(1))
     g = torch.tanh(zf[:, 2])
@@ -351,12 +413,12 @@ def _bf16_forward_step_torch(t, z, bias, w_peep, gates, cells, tanh_cells, hidde
         xh[t + 1, :, xh.shape[2] - H:] = hidden[t + 1]
 
 
-def _bf16_backward_step_torch(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec,
-                              use_rec, dc, dg_out, d_bias, d_peep):
-    """:func:`_bf16_backward_step` with torch ops on bf16 tensors (non-CPU devices)."""
+def _backward_step_torch(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec, use_rec,
+                         dc, dg_out, d_bias, d_peep):
+    """The backward step kernels' math with torch ops, any dtype and device."""
     i, f, g, o = gates[t].unbind(1)
     tc, c_prev = tanh_cells[t], cells[t]
-    dh = d_hidden[t] + (rec.float() if use_rec else d_hn)
+    dh = d_hidden[t] + (rec.to(d_hn.dtype) if use_rec else d_hn)
     do = dh * tc * o * (1 - o)
     dc += dh * o * (1 - tc * tc) + do * w_peep[2]
     di = dc * g * i * (1 - i)
@@ -370,25 +432,35 @@ def _bf16_backward_step_torch(t, gates, cells, tanh_cells, w_peep, d_hidden, d_h
                            (do * cells[t + 1]).sum(0)])
 
 
-class _PeepholeLSTMBF16Function(torch.autograd.Function):
-    """The bf16 path: :class:`_PeepholeLSTMFunction`'s math with bf16 matmuls.
+def _as_numpy(tensor):
+    """A CPU tensor as numpy, bf16 as its int16 bit patterns (numba has no bfloat16)."""
+    if tensor.dtype == torch.bfloat16:
+        return tensor.view(torch.int16).numpy()
+    return tensor.numpy()
 
-    Layout is batch-major, (T, B, 4, H) with gates i, f, g, o: one step's pre-activations
-    are ONE (B, F+H) x (F+H, 4H) product of ``[x_t, h_{t-1}]`` (kept as a bf16 buffer
-    ``xh``) with ``[W_x, W_h]^T`` -- input projection and recurrence together -- and every
-    weight gradient is one (4H, T B) x (T B, F+H) product after the loop (float32
-    accumulation inside oneDNN over all T B terms, one rounding at the end), instead of T
-    small ones. In float32: the saved gates, cell states and h, the cell-gradient
-    recurrence and the bias and peephole gradients. ``kernels`` is "numba" (CPU) or
-    "torch" (any device; also the reference the numba kernels are tested against).
+
+class _FusedPeepholeLSTMFunction(torch.autograd.Function):
+    """The training path: :class:`_PeepholeLSTMFunction`'s math, fused per step.
+
+    ``apply(x, h0, c0, w_x, w_h, bias, w_peep, bf16, kernels)``. Layout is batch-major,
+    (T, B, 4, H) with gates i, f, g, o: one step's pre-activations are ONE (B, F+H) x
+    (F+H, 4H) product of ``[x_t, h_{t-1}]`` (kept as a buffer ``xh`` in the matmul dtype)
+    with ``[W_x, W_h]^T`` -- input projection and recurrence together -- and every weight
+    gradient is one (4H, T B) x (T B, F+H) product after the loop, instead of T small
+    ones. ``bf16``: the matmuls in bfloat16 (accumulated in float32 inside oneDNN, one
+    rounding at the end), else in the inputs' dtype. The saved gates, cell states and h,
+    the cell-gradient recurrence and the bias and peephole gradients stay in the inputs'
+    dtype. ``kernels`` is "numba" (CPU, float32) or "torch" (any device and dtype; also
+    the reference the numba kernels are tested against).
     """
 
     @staticmethod
-    def forward(ctx, x, h0, c0, w_x, w_h, bias, w_peep, kernels="numba"):
+    def forward(ctx, x, h0, c0, w_x, w_h, bias, w_peep, bf16=False, kernels="numba"):
         T, B, F = x.shape
         H = w_h.shape[1]
-        w_cat = torch.cat([w_x, w_h], 1).to(torch.bfloat16)        # (4H, F+H)
-        xh = x.new_empty(T, B, F + H, dtype=torch.bfloat16)        # [x_t, h_{t-1}]
+        mm_dtype = torch.bfloat16 if bf16 else x.dtype
+        w_cat = torch.cat([w_x, w_h], 1).to(mm_dtype)              # (4H, F+H)
+        xh = x.new_empty(T, B, F + H, dtype=mm_dtype)              # [x_t, h_{t-1}]
         xh[:, :, :F] = x
         xh[0, :, F:] = h0
         gates = x.new_empty(T, B, 4, H)
@@ -397,22 +469,20 @@ class _PeepholeLSTMBF16Function(torch.autograd.Function):
         tanh_cells = x.new_empty(T, B, H)
         cells[0] = c0
         hidden[0] = h0
-        z = x.new_empty(B, 4 * H, dtype=torch.bfloat16)
+        z = x.new_empty(B, 4 * H, dtype=mm_dtype)
         w_t = w_cat.t().contiguous()         # a transposed view was 1.4x slower per step
         bias4, w_peep = bias.detach().view(4, H), w_peep.detach()
+        arrays = (z, bias4, w_peep, gates, cells, tanh_cells, hidden, xh)
         if kernels == "numba":
-            step = _bf16_forward_step
-            arrays = (z.view(torch.int16).numpy(), bias4.numpy(), w_peep.numpy(),
-                      gates.numpy(), cells.numpy(), tanh_cells.numpy(), hidden.numpy(),
-                      xh.view(torch.int16).numpy())
+            step = _bf16_forward_step if bf16 else _fp32_forward_step
+            arrays = tuple(_as_numpy(a) for a in arrays)
         else:
-            step = _bf16_forward_step_torch
-            arrays = (z, bias4, w_peep, gates, cells, tanh_cells, hidden, xh)
+            step = _forward_step_torch
         for t in range(T):
             torch.mm(xh[t], w_t, out=z)
             step(t, *arrays)
         ctx.save_for_backward(xh, w_x, w_h, w_peep, gates, cells, tanh_cells)
-        ctx.kernels = kernels
+        ctx.bf16, ctx.kernels = bf16, kernels
         h_seq = hidden[1:]
         return h_seq, h_seq[-1].clone(), cells[-1].clone()
 
@@ -422,35 +492,35 @@ class _PeepholeLSTMBF16Function(torch.autograd.Function):
         xh, w_x, w_h, w_peep, gates, cells, tanh_cells = ctx.saved_tensors
         T, B, _, H = gates.shape
         F = w_x.shape[1]
+        mm_dtype = xh.dtype
         d_hidden = torch.zeros_like(tanh_cells) if d_hidden is None else d_hidden.contiguous()
         d_hn = torch.zeros_like(cells[0]) if d_hn is None else d_hn.contiguous()
         dc = d_cn.clone().contiguous() if d_cn is not None else torch.zeros_like(cells[0])
-        w_h16 = w_h.detach().to(torch.bfloat16).contiguous()          # (4H, H)
-        d_gates = gates.new_empty(T, B, 4 * H, dtype=torch.bfloat16)
-        rec = gates.new_zeros(B, H, dtype=torch.bfloat16)           # dg_{t+1} W_h
+        w_h_mm = w_h.detach().to(mm_dtype).contiguous()               # (4H, H)
+        d_gates = gates.new_empty(T, B, 4 * H, dtype=mm_dtype)
+        rec = gates.new_zeros(B, H, dtype=mm_dtype)                 # dg_{t+1} W_h
         d_bias = gates.new_zeros(4, H)
         d_peep = gates.new_zeros(3, H)
+        arrays = (gates, cells, tanh_cells, w_peep.detach(), d_hidden, d_hn, rec)
+        state = (dc, d_gates, d_bias, d_peep)
         if ctx.kernels == "numba":
-            step = _bf16_backward_step
-            arrays = (gates.numpy(), cells.numpy(), tanh_cells.numpy(), w_peep.numpy(),
-                      d_hidden.numpy(), d_hn.numpy(), rec.view(torch.int16).numpy())
-            state = (dc.numpy(), d_gates.view(torch.int16).numpy(), d_bias.numpy(),
-                     d_peep.numpy())
+            step = _bf16_backward_step if ctx.bf16 else _fp32_backward_step
+            arrays = tuple(_as_numpy(a) for a in arrays)
+            state = tuple(_as_numpy(a) for a in state)
         else:
-            step = _bf16_backward_step_torch
-            arrays = (gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec)
-            state = (dc, d_gates, d_bias, d_peep)
+            step = _backward_step_torch
         for t in range(T - 1, -1, -1):
             step(t, *arrays, t < T - 1, *state)
-            torch.mm(d_gates[t], w_h16, out=rec)
-        dh0 = rec.float()
+            torch.mm(d_gates[t], w_h_mm, out=rec)
+        dtype = gates.dtype
+        dh0 = rec.to(dtype)
         dg_all = d_gates.view(T * B, 4 * H)
-        d_w = torch.mm(dg_all.t(), xh.view(T * B, F + H)).float()   # [dW_x, dW_h]
+        d_w = torch.mm(dg_all.t(), xh.view(T * B, F + H)).to(dtype)   # [dW_x, dW_h]
         d_x = None
         if ctx.needs_input_grad[0]:
-            d_x = torch.mm(dg_all, w_x.detach().to(torch.bfloat16)).float().view(T, B, F)
+            d_x = torch.mm(dg_all, w_x.detach().to(mm_dtype)).to(dtype).view(T, B, F)
         return (d_x, dh0, dc, d_w[:, :F].contiguous(), d_w[:, F:].contiguous(),
-                d_bias.view(4 * H), d_peep, None)
+                d_bias.view(4 * H), d_peep, None, None)
 
 
 class PeepholeLSTM(nn.Module):
@@ -469,9 +539,11 @@ class PeepholeLSTM(nn.Module):
         records (and its backward) runs every matmul in bfloat16 -- on the CPU's AMX
         units -- while the cell state, the gate nonlinearities, h, the losses and all
         gradient accumulation stay float32; the parameters themselves stay float32 (Adam's
-        master weights). A forward pass autograd does not record (under
-        ``torch.no_grad()``: evaluation, validation, ``record``) always runs float32, so
-        a network behaves the same however it was trained.
+        master weights). With "fp32", such a pass on the CPU in float32 takes the fused
+        float32 kernels (equal to the plain path up to rounding, ~1e-6 relative). A
+        forward pass autograd does not record (under ``torch.no_grad()``: evaluation,
+        validation, ``record``) always runs the plain float32 path, so a network behaves
+        the same however it was trained.
 
     Attributes
     ----------
@@ -551,10 +623,13 @@ class PeepholeLSTM(nn.Module):
                     raise ValueError(f"`state` {name} must have shape ({B}, "
                                      f"{self.hidden_size}); got {tuple(v.shape)}")
         args = (x, h0, c0, self.weight_x, self.weight_h, self.bias, self.weight_peephole)
-        if (self.precision == "bf16" and torch.is_grad_enabled()
-                and any(a.requires_grad for a in args)):
-            kernels = "numba" if x.device.type == "cpu" else "torch"
-            h_seq, h_n, c_n = _PeepholeLSTMBF16Function.apply(*args, kernels)
+        recorded = torch.is_grad_enabled() and any(a.requires_grad for a in args)
+        on_cpu = x.device.type == "cpu"
+        if recorded and self.precision == "bf16":
+            kernels = "numba" if on_cpu else "torch"
+            h_seq, h_n, c_n = _FusedPeepholeLSTMFunction.apply(*args, True, kernels)
+        elif recorded and on_cpu and x.dtype == torch.float32:
+            h_seq, h_n, c_n = _FusedPeepholeLSTMFunction.apply(*args, False, "numba")
         else:
             h_seq, h_n, c_n = _PeepholeLSTMFunction.apply(*args)
         return h_seq, (h_n, c_n)

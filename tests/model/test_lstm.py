@@ -1,7 +1,12 @@
 import pytest
 import torch
 
-from hippo_probe.model.lstm import PeepholeLSTM, _PeepholeLSTMFunction, reference_peephole_lstm
+from hippo_probe.model.lstm import (
+    PeepholeLSTM,
+    _FusedPeepholeLSTMFunction,
+    _PeepholeLSTMFunction,
+    reference_peephole_lstm,
+)
 
 
 def _args(T=6, B=3, F=4, H=5, seed=0, dtype=torch.float64):
@@ -26,6 +31,61 @@ def test_forward_and_gradients_match_plain_autograd_reference():
     grads_ref = torch.autograd.grad(sum((o * wi).sum() for o, wi in zip(ref, w)), args)
     for a, b in zip(grads_fast, grads_ref):
         torch.testing.assert_close(a, b, rtol=1e-10, atol=1e-10)
+
+
+def _fused(*args, kernels="torch"):
+    """The fused training path with matmuls in the inputs' dtype."""
+    return _FusedPeepholeLSTMFunction.apply(*args, False, kernels)
+
+
+def _outputs_and_grads(fn, args):
+    out = fn(*args)
+    g = torch.Generator().manual_seed(99)
+    # drawn in float64 whatever the outputs' dtype, so both precisions get the same loss
+    w = [torch.randn(o.shape, generator=g, dtype=torch.float64).to(o.dtype) for o in out]
+    grads = torch.autograd.grad(sum((o * wi).sum() for o, wi in zip(out, w)), args)
+    return [o.detach() for o in out] + list(grads)
+
+
+def _rel(a, b):
+    return float((a.double() - b.double()).norm() / b.double().norm())
+
+
+def test_fused_path_gradcheck_against_finite_differences():
+    # the fused layout's math (batch-major, one matmul a step), in float64 via its torch
+    # kernels; the numba kernels are float32 and checked against it below
+    assert torch.autograd.gradcheck(_fused, _args())
+
+
+def test_fused_float32_kernels_match_the_plain_path():
+    """The training path's numba kernels against the plain Function in float64: the same
+    math up to float32 rounding and the kernels' rational tanh (3.4e-7)."""
+    args64 = _args(T=40, B=4, F=3, H=16, seed=3)
+    with torch.no_grad():
+        for w in args64[3:]:
+            w.mul_(16 ** -0.5)                       # the module's initialisation scale
+    args32 = [a.detach().float().requires_grad_() for a in args64]
+    ref = _outputs_and_grads(_PeepholeLSTMFunction.apply, args64)
+    numba = _outputs_and_grads(lambda *a: _fused(*a, kernels="numba"), args32)
+    torch_kernels = _outputs_and_grads(_fused, args32)
+    for a, b, r in zip(numba, torch_kernels, ref):
+        assert _rel(a, r) < 2e-6 and _rel(b, r) < 2e-6     # measured <= 3.4e-7
+
+
+def test_module_trains_through_the_fused_path_and_infers_through_the_plain_one():
+    torch.manual_seed(0)
+    lstm = PeepholeLSTM(9, hidden_size=16)
+    x = torch.randn(15, 3, 9)
+    zeros = torch.zeros(3, 16)
+    params = (lstm.weight_x, lstm.weight_h, lstm.bias, lstm.weight_peephole)
+    h = lstm(x)[0]
+    fused = _fused(x, zeros, zeros, *params, kernels="numba")[0]
+    torch.testing.assert_close(h, fused, rtol=0, atol=0)
+    with torch.no_grad():
+        plain = _PeepholeLSTMFunction.apply(x, zeros, zeros, *params)[0]
+        torch.testing.assert_close(lstm(x)[0], plain, rtol=0, atol=0)
+    assert not torch.equal(h.detach(), plain)      # two paths, differing in rounding only
+    assert _rel(h.detach(), plain) < 1e-6
 
 
 def test_peepholes_matter():

@@ -21,8 +21,8 @@ import torch
 from hippo_probe.model import ModelConfig, Navigator
 from hippo_probe.model.lstm import (
     PeepholeLSTM,
+    _FusedPeepholeLSTMFunction,
     _narrow,
-    _PeepholeLSTMBF16Function,
     _PeepholeLSTMFunction,
     _tanh,
     _widen,
@@ -78,7 +78,7 @@ def test_rational_tanh_is_float32_accurate():
 def test_bf16_matches_fp32_within_bf16_tolerance(seed):
     args = _args(seed=seed)
     ref_out, ref_grads = _outputs_and_grads(_PeepholeLSTMFunction, args)
-    out, grads = _outputs_and_grads(_PeepholeLSTMBF16Function, args, "numba")
+    out, grads = _outputs_and_grads(_FusedPeepholeLSTMFunction, args, True, "numba")
     for name, a, b in zip(("h_seq", "h_n", "c_n"), out, ref_out):
         assert FLOOR < _rel(a, b) < OUT_TOL, name
     for name, a, b in zip(NAMES, grads, ref_grads):
@@ -90,8 +90,8 @@ def test_numba_kernels_match_the_torch_kernels():
     Not bit-equal: the kernels' rational tanh and fused multiply-adds differ from torch's
     in the last float32 bits, which can flip a bf16 rounding now and then."""
     args = _args(T=12, seed=3)
-    out_n, grads_n = _outputs_and_grads(_PeepholeLSTMBF16Function, args, "numba")
-    out_t, grads_t = _outputs_and_grads(_PeepholeLSTMBF16Function, args, "torch")
+    out_n, grads_n = _outputs_and_grads(_FusedPeepholeLSTMFunction, args, True, "numba")
+    out_t, grads_t = _outputs_and_grads(_FusedPeepholeLSTMFunction, args, True, "torch")
     for a, b in zip(out_n + grads_n, out_t + grads_t):
         assert _rel(a, b) < 2.0 ** -12          # measured <= 2.5e-7
 
@@ -99,7 +99,7 @@ def test_numba_kernels_match_the_torch_kernels():
 def test_bf16_path_without_input_gradient_and_single_step():
     x, *rest = _args(T=1, seed=4)
     x = x.detach()
-    out = torch.autograd.grad(_PeepholeLSTMBF16Function.apply(x, *rest, "numba")[0].sum(),
+    out = torch.autograd.grad(_FusedPeepholeLSTMFunction.apply(x, *rest, True, "numba")[0].sum(),
                               rest)
     ref = torch.autograd.grad(_PeepholeLSTMFunction.apply(x, *rest)[0].sum(), rest)
     for a, b in zip(out, ref):
@@ -113,14 +113,15 @@ def test_module_runs_bf16_only_when_autograd_records():
     bf16.load_state_dict(fp32.state_dict())
     x = torch.randn(15, 3, 9)
     with torch.no_grad():                 # evaluation / record: float32, bit for bit
-        torch.testing.assert_close(bf16(x)[0], fp32(x)[0], rtol=0, atol=0)
+        plain = fp32(x)[0]
+        torch.testing.assert_close(bf16(x)[0], plain, rtol=0, atol=0)
     h_fp32, h_bf16 = fp32(x)[0].detach(), bf16(x)[0]
     assert h_bf16.requires_grad and FLOOR < _rel(h_bf16.detach(), h_fp32) < OUT_TOL
     h_bf16.sum().backward()               # parameters and their gradients stay float32
     assert all(p.dtype == p.grad.dtype == torch.float32 for p in bf16.parameters())
-    for p in bf16.parameters():           # nothing to differentiate: float32 again
+    for p in bf16.parameters():           # nothing to differentiate: plain float32 again
         p.requires_grad_(False)
-    torch.testing.assert_close(bf16(x)[0], h_fp32, rtol=0, atol=0)
+    torch.testing.assert_close(bf16(x)[0], plain, rtol=0, atol=0)
 
 
 def test_precision_is_checked_and_plumbed():

@@ -10,10 +10,10 @@ readout is trained for this, is the positive control: the probe should find in i
 what its readout finds.
 
     python analyses/arena_probe.py [--train-trials 1500] [--test-trials 500]
-        [--networks generalized specialized] [--out figures/]
+        [--networks generalized specialized] [--seeds 0 1 2] [--out figures/]
 
 Writes ``arena_probe.json`` and ``arena_probe.md`` (accuracy at 50, 100, 200 s, per
-network and C; chance 0.01).
+network, training seed and C; chance 0.01).
 """
 
 import argparse
@@ -42,34 +42,38 @@ def main():
     ap.add_argument("--train-trials", type=int, default=1500)
     ap.add_argument("--test-trials", type=int, default=500)
     ap.add_argument("--networks", nargs="+", default=["generalized", "specialized"])
-    ap.add_argument("--seed", type=int, default=0, help="training seed of the networks")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0],
+                    help="training seeds of the networks (default: 0)")
     ap.add_argument("--out", default=str(ROOT / "figures"))
     a = ap.parse_args()
     torch.set_num_threads(1)
     results = {}
-    lines = ["| network | C | " + " | ".join(f"test accuracy at {t} s (train)" for t in TIMES_S)
-             + " |", "| --- | --- |" + " --- |" * len(TIMES_S)]
+    lines = ["| network | seed | C | " + " | ".join(
+        f"test accuracy at {t} s (train)" for t in TIMES_S) + " |",
+        "| --- | --- | --- |" + " --- |" * len(TIMES_S)]
     for network in a.networks:
-        t0 = time.time()
-        net = hp.load_pretrained(network, seed=a.seed)
-        train = recording(net, "train", a.train_trials)
-        test = recording(net, "test", a.test_trials)
         results[network] = {}
-        for c in C_VALUES:
-            res = hp.decode_environment(train, test=test, times=TIMES_S, c=c)
-            row = {f"{t}s": {"train": float(res.train_accuracy.sel(trial_time=t)),
-                             "test": float(res.accuracy.sel(trial_time=t))}
-                   for t in TIMES_S}
-            results[network][str(c)] = row
-            lines.append(f"| {network} | {c:g} | " + " | ".join(
-                f"{row[f'{t}s']['test']:.2f} ({row[f'{t}s']['train']:.2f})" for t in TIMES_S)
-                + " |")
-        print(f"{network}: {time.time() - t0:.0f} s")
+        for seed in a.seeds:
+            t0 = time.time()
+            net = hp.load_pretrained(network, seed=seed)
+            train = recording(net, "train", a.train_trials)
+            test = recording(net, "test", a.test_trials)
+            results[network][str(seed)] = {}
+            for c in C_VALUES:
+                res = hp.decode_environment(train, test=test, times=TIMES_S, c=c)
+                row = {f"{t}s": {"train": float(res.train_accuracy.sel(trial_time=t)),
+                                 "test": float(res.accuracy.sel(trial_time=t))}
+                       for t in TIMES_S}
+                results[network][str(seed)][str(c)] = row
+                lines.append(f"| {network} | {seed} | {c:g} | " + " | ".join(
+                    f"{row[f'{t}s']['test']:.2f} ({row[f'{t}s']['train']:.2f})"
+                    for t in TIMES_S) + " |")
+            print(f"{network}, seed {seed}: {time.time() - t0:.0f} s")
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "arena_probe.json", json.dumps(
         {"train_trials": a.train_trials, "test_trials": a.test_trials, "chance": 0.01,
-         "seed": a.seed, "results": results}, indent=1), what="probe results")
+         "results": results}, indent=1), what="probe results")
     write_text(out / "arena_probe.md", "\n".join(lines) + "\n", what="probe table")
     print("\n".join(lines))
 

@@ -223,7 +223,9 @@ def test_arena_probe(tmp_path):
                          text=True, cwd=ROOT, timeout=900)
     assert run.returncode == 0, run.stderr[-3000:]
     res = json.loads((tmp_path / "arena_probe.json").read_text())["results"]
-    cells = [cell for by_c in res["specialized_compass"].values() for cell in by_c.values()]
+    # results[network][training seed][C][time]
+    cells = [cell for by_t in res["specialized_compass"]["0"].values()
+             for cell in by_t.values()]
     assert len(cells) == 9 and all(0 <= c["test"] <= 1 for c in cells)
     # the positive control: a probe of the specialized network separates the training
     # trials' arenas far above chance (0.01)

@@ -490,6 +490,8 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
         raise
     finally:
         bar.close()
+    if len(segments) > 1 and segments[-1][0] == step:
+        segments.pop()        # resumed only to be tested: no step was trained in it
     if rank == 0:
         if not log["validation"] or log["validation"][-1]["step"] != step:
             validate()

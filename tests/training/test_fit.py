@@ -119,6 +119,10 @@ def test_a_run_resumed_in_another_precision_logs_each_stretch(uninterrupted, tmp
                   cache_dir=d / "cache", progress=False)
     assert log["precision_from_step"] == [[0, "fp32"], [3, "bf16"]]
     assert log["train"][-1]["step"] == TINY["steps"]
+    # a finished run started again (the training queue re-tests it) on the other kind of
+    # machine trains no step: it gains no empty stretch
+    log = fit(TrainConfig(**TINY), tmp_path / "run", cache_dir=d / "cache", progress=False)
+    assert log["precision_from_step"] == [[0, "fp32"], [3, "bf16"]]
     # a checkpoint written before `precision` existed was trained in float32
     old = TrainConfig(**TINY).to_dict()
     del old["precision"]

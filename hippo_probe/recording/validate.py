@@ -110,6 +110,9 @@ def _check_attrs(rec):
         _fail("source", f"(dataset attr) must be one of {SOURCES}; got {_v(rec.attrs['source'])}")
     if not rec.attrs["activity_kind"]:
         _fail("activity_kind", "(dataset attr) must be a non-empty string, e.g. 'spike_count'")
+    dt = rec.attrs["dt"]
+    if not (np.isfinite(dt) and dt > 0):
+        _fail("dt", f"(dataset attr) must be a finite number of seconds > 0; got {_v(dt)}")
     for name, value in rec.attrs.items():
         if not _storable(value):
             _fail(name, f"(dataset attr) must be a string, number, bool, None or a list or "
@@ -127,9 +130,6 @@ def _storable(value) -> bool:
     if isinstance(value, dict):
         return all(isinstance(k, str) and _storable(v) for k, v in value.items())
     return False
-    dt = rec.attrs["dt"]
-    if not (np.isfinite(dt) and dt > 0):
-        _fail("dt", f"(dataset attr) must be a finite number of seconds > 0; got {_v(dt)}")
 
 
 def _check_variables(rec):

@@ -273,9 +273,14 @@ def rows(fig):
            "Fig. 4D: remapping between arenas", "correlation across arenas")
 
 
-def error_table(fig):
+def error_table(figs):
     """Markdown rows: each network's mean Euclidean error at 50 / 100 / 200 s beside the
-    baselines' on the same test trials (Fig. 2, 3A, 3B)."""
+    baselines' on the same test trials (Fig. 2, 3A, 3B).
+
+    ``figs`` is one run's figures (``{figN: data}``) per training seed. A number that
+    differs between seeds (the network's) reads ``mean (min–max)``; the baselines, run
+    on the same trials for every seed, read once.
+    """
     cols = ["network", "particle filter (oracle)", "single hypothesis", "path integration",
             "naive Bayes"]
     panels = [("localization (familiar 1 m arena, start unknown)", "fig2", "euclidean"),
@@ -284,12 +289,15 @@ def error_table(fig):
     lines = ["| network (task) | " + " | ".join(cols) + " |",
              "| --- |" + " --- |" * len(cols)]
     for label, f, key in panels:
-        curves, t = _get(fig, f, key), _get(fig, f, "trial_time_s")
-        if not curves or t is None:
+        runs = [(_get(fig, f, key), _get(fig, f, "trial_time_s")) for fig in figs]
+        runs = [(curves, t) for curves, t in runs if curves and t is not None]
+        if not runs:
             continue
+        t = runs[0][1]
         index = [min(range(len(t)), key=lambda i: abs(t[i] - s)) for s in (50, 100, 200)]
-        cells = [" / ".join(f"{curves[c][i]:.3f}" for i in index) if c in curves else "—"
-                 for c in cols]
+        cells = [" / ".join(_spread([curves[c][i] for curves, _ in runs if c in curves],
+                                    ".3f")
+                            for i in index) if c in runs[0][0] else "—" for c in cols]
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return lines
 
@@ -343,14 +351,15 @@ def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
-def _spread(values: list) -> str:
-    """``mean (min–max)`` of one headline number over seeds; ``n/a`` if none."""
+def _spread(values: list, spec: str = ".2f") -> str:
+    """``mean (min–max)`` of one number over seeds, or the number alone where every seed
+    has exactly the same (one seed; a baseline run on the same trials); ``n/a`` if none."""
     values = [v for v in values if v is not None and math.isfinite(v)]
     if not values:
         return "n/a"
     mean = sum(values) / len(values)
-    return f"{mean:.2f}" if len(values) == 1 else \
-        f"{mean:.2f} ({min(values):.2f}–{max(values):.2f})"
+    return format(mean, spec) if min(values) == max(values) else \
+        f"{mean:{spec}} ({min(values):{spec}}–{max(values):{spec}})"
 
 
 def _stopped(stopped) -> str:
@@ -472,19 +481,23 @@ def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES, *, runs=N
                   "| claim | this project | verdict (rule) |", "| --- | --- | --- |"]
         lines += [f"| {c['claim'].claim} | {c['claim'].measured} | {c['claim'].verdict} |"
                   for c in columns[w]]
-        table = error_table(mean)
+        figs = list(runs[w].values())
+        spread = "" if len(figs) == 1 else f"; mean (min–max) over the {len(figs)} seeds"
+        table = error_table(figs)
         if len(table) > 2:
             lines += ["", "Mean Euclidean error (m) at 50 / 100 / 200 s on the same test "
-                      f"trials ({_get(mean, 'fig2', 'n_trials')} per network):", "", *table]
-        acc = [(name, _get(mean, "fig3", key)) for name, key in
+                      f"trials ({_get(mean, 'fig2', 'n_trials')} per network{spread}):", "",
+                      *table]
+        acc = [(name, [_get(fig, "fig3", key) for fig in figs]) for name, key in
                (("specialized network", "C_accuracy_at"),
                 ("generalized network, retrained readout", "F_readout_accuracy_at"))]
-        acc = [(n, a) for n, a in acc if a]
+        acc = [(n, [a for a in by_seed if a]) for n, by_seed in acc]
+        acc = [(n, by_seed) for n, by_seed in acc if by_seed]
         if acc:
             lines += ["", "Arena classification accuracy at 50 / 100 / 200 s (chance "
-                      "0.01): " + "; ".join(f"{n} " + " / ".join(
-                          f"{a[k]:.2f}" for k in ("50s", "100s", "200s")) for n, a in acc)
-                      + "."]
+                      f"0.01{spread}): " + "; ".join(f"{n} " + " / ".join(
+                          _spread([a[k] for a in by_seed]) for k in ("50s", "100s", "200s"))
+                          for n, by_seed in acc) + "."]
     if notes_path is not None:
         text = notes_path.read_text()
         unfilled = sorted(set(re.findall(r"\{[A-Z_]+\}", text)))

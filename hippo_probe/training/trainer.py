@@ -388,10 +388,10 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
         # the old verdict and test results must not outlive the training they describe
         for key in ("stopped", "test", "test_curves", "best_validation_loss"):
             log.pop(key, None)
+    # the precision of each stretch of trained steps; a stretch starts at its first
+    # trained step, so a finished run re-tested on other hardware gains none
     segments = log.setdefault("precision_from_step",
                               [[0, log["config"].get("precision", "fp32")]])
-    if segments[-1][1] != config.precision:
-        segments.append([step, config.precision])   # resumed on other hardware
 
     train_net = net
     if world_size > 1:
@@ -402,13 +402,19 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
 
     model_config = _plain(net.config)      # plain values: loadable with weights_only
 
+    def trained_config():
+        """``config`` with the precision of the last stretch trained, not of the machine
+        that saves: a finished run re-tested elsewhere keeps its own."""
+        return dataclasses.replace(config, precision=segments[-1][1])
+
     def checkpoint(model_state=None):
         if rank == 0:
             save_atomic({"model": model_state or net.state_dict(),
                          "optimizer": opt.state_dict(), "step": step,
                          "best_loss": best_loss, "best_model": best_state,
-                         "config": config.to_dict(), "model_config": model_config,
-                         "task": config.task, "log": log}, ckpt_path)
+                         "config": trained_config().to_dict(),
+                         "model_config": model_config, "task": config.task, "log": log},
+                        ckpt_path)
 
     def validate():
         nonlocal best_loss, best_state
@@ -448,6 +454,8 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
                 if reason is not None:
                     log["stopped"] = {"step": step, "reason": reason}
                     break
+            if segments[-1][1] != config.precision:
+                segments.append([step, config.precision])   # resumed on other hardware
             idx = data.indices(step)
             per_rank = config.batch_size // world_size
             idx = idx[rank * per_rank:(rank + 1) * per_rank]
@@ -490,8 +498,6 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
         raise
     finally:
         bar.close()
-    if len(segments) > 1 and segments[-1][0] == step:
-        segments.pop()        # resumed only to be tested: no step was trained in it
     if rank == 0:
         if not log["validation"] or log["validation"][-1]["step"] != step:
             validate()
@@ -504,7 +510,7 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
                               if isinstance(v, np.ndarray)}
         log["best_validation_loss"] = best_loss
         checkpoint(last_state)        # the checkpoint keeps the last parameters
-        save_network(net, config, log, run_dir / "network.pt")
+        save_network(net, trained_config(), log, run_dir / "network.pt")
         write_text(run_dir / "log.json", json.dumps(log, indent=1), what="out")
     if world_size > 1:
         torch.distributed.barrier()

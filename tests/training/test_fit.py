@@ -123,6 +123,12 @@ def test_a_run_resumed_in_another_precision_logs_each_stretch(uninterrupted, tmp
     # machine trains no step: it gains no empty stretch
     log = fit(TrainConfig(**TINY), tmp_path / "run", cache_dir=d / "cache", progress=False)
     assert log["precision_from_step"] == [[0, "fp32"], [3, "bf16"]]
+    # and the network and checkpoint it saves name the precision that trained its last
+    # steps, not the re-testing machine's
+    net = hp.load_pretrained(tmp_path / "run" / "network.pt")
+    assert net.info["config"]["precision"] == "bf16"
+    ckpt = torch.load(tmp_path / "run" / "checkpoint.pt", weights_only=False)
+    assert ckpt["config"]["precision"] == "bf16"
     # a checkpoint written before `precision` existed was trained in float32
     old = TrainConfig(**TINY).to_dict()
     del old["precision"]

@@ -279,7 +279,8 @@ def error_table(figs):
 
     ``figs`` is one run's figures (``{figN: data}``) per training seed. A number that
     differs between seeds (the network's) reads ``mean (min–max)``; the baselines, run
-    on the same trials for every seed, read once.
+    on the same trials for every seed, read once. A row that not every seed has says how
+    many it is over.
     """
     cols = ["network", "particle filter (oracle)", "single hypothesis", "path integration",
             "naive Bayes"]
@@ -289,15 +290,20 @@ def error_table(figs):
     lines = ["| network (task) | " + " | ".join(cols) + " |",
              "| --- |" + " --- |" * len(cols)]
     for label, f, key in panels:
-        runs = [(_get(fig, f, key), _get(fig, f, "trial_time_s")) for fig in figs]
-        runs = [(curves, t) for curves, t in runs if curves and t is not None]
-        if not runs:
+        # each seed's values at 50 / 100 / 200 s, on its own time axis
+        at = []
+        for fig in figs:
+            curves, t = _get(fig, f, key), _get(fig, f, "trial_time_s")
+            if curves and t is not None:
+                index = [min(range(len(t)), key=lambda i: abs(t[i] - s))
+                         for s in (50, 100, 200)]
+                at.append({c: [v[i] for i in index] for c, v in curves.items()})
+        if not at:
             continue
-        t = runs[0][1]
-        index = [min(range(len(t)), key=lambda i: abs(t[i] - s)) for s in (50, 100, 200)]
-        cells = [" / ".join(_spread([curves[c][i] for curves, _ in runs if c in curves],
-                                    ".3f")
-                            for i in index) if c in runs[0][0] else "—" for c in cols]
+        cells = [" / ".join(_spread([a[c][k] for a in at if c in a], ".3f") for k in range(3))
+                 if any(c in a for a in at) else "—" for c in cols]
+        if len(at) < len(figs):
+            label += f" ({len(at)} of {len(figs)} seeds)"
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return lines
 
@@ -352,14 +358,15 @@ def _is_number(v) -> bool:
 
 
 def _spread(values: list, spec: str = ".2f") -> str:
-    """``mean (min–max)`` of one number over seeds, or the number alone where every seed
-    has exactly the same (one seed; a baseline run on the same trials); ``n/a`` if none."""
+    """``mean (min–max)`` of one number over seeds, or the number alone where the seeds
+    agree to the printed digits (one seed; a baseline run on the same trials, whose last
+    bits may differ between CPUs); ``n/a`` if none."""
     values = [v for v in values if v is not None and math.isfinite(v)]
     if not values:
         return "n/a"
-    mean = sum(values) / len(values)
-    return format(mean, spec) if min(values) == max(values) else \
-        f"{mean:{spec}} ({min(values):{spec}}–{max(values):{spec}})"
+    mean, lo, hi = (format(v, spec) for v in (sum(values) / len(values), min(values),
+                                             max(values)))
+    return mean if lo == hi else f"{mean} ({lo}–{hi})"
 
 
 def _stopped(stopped) -> str:
@@ -492,7 +499,8 @@ def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES, *, runs=N
                (("specialized network", "C_accuracy_at"),
                 ("generalized network, retrained readout", "F_readout_accuracy_at"))]
         acc = [(n, [a for a in by_seed if a]) for n, by_seed in acc]
-        acc = [(n, by_seed) for n, by_seed in acc if by_seed]
+        acc = [(n if len(by_seed) == len(figs) else f"{n} ({len(by_seed)} of {len(figs)} "
+                f"seeds)", by_seed) for n, by_seed in acc if by_seed]
         if acc:
             lines += ["", "Arena classification accuracy at 50 / 100 / 200 s (chance "
                       f"0.01{spread}): " + "; ".join(f"{n} " + " / ".join(

@@ -87,8 +87,9 @@ def resolve_network_file(name_or_path, seed=None) -> Path:
 def load_pretrained(name: str, seed: int | None = None):
     """Load a shipped network (or a network/checkpoint file) as a Navigator in eval mode.
 
-    The network runs float32 whatever precision trained it (``net.info["config"]`` says
-    which), so its outputs, and gradients taken through it, are the same everywhere.
+    The network runs float32 whatever precision trained it (``net.info["config"]`` names
+    that of its last trained stretch; the training log's ``precision_from_step``, every
+    stretch), so its outputs, and gradients taken through it, are the same everywhere.
 
     Parameters
     ----------

@@ -302,10 +302,13 @@ def error_table(figs):
             continue
         cells = [" / ".join(_spread([a[c][k] for a in at if c in a], ".3f") for k in range(3))
                  if any(c in a for a in at) else "—" for c in cols]
-        if len(at) < len(figs):
-            label += f" ({len(at)} of {len(figs)} seeds)"
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+        lines.append(f"| {label}{_over(len(at), len(figs))} | " + " | ".join(cells) + " |")
     return lines
+
+
+def _over(n: int, of: int) -> str:
+    """Where a number is over only some of the seeds, how many: `` (n of N seeds)``."""
+    return "" if n == of else f" ({n} of {of} seeds)"
 
 
 #: A run's folder under the figures' output: ``<world>-seed<k>``.
@@ -495,12 +498,12 @@ def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES, *, runs=N
             lines += ["", "Mean Euclidean error (m) at 50 / 100 / 200 s on the same test "
                       f"trials ({_get(mean, 'fig2', 'n_trials')} per network{spread}):", "",
                       *table]
-        acc = [(name, [_get(fig, "fig3", key) for fig in figs]) for name, key in
-               (("specialized network", "C_accuracy_at"),
-                ("generalized network, retrained readout", "F_readout_accuracy_at"))]
-        acc = [(n, [a for a in by_seed if a]) for n, by_seed in acc]
-        acc = [(n if len(by_seed) == len(figs) else f"{n} ({len(by_seed)} of {len(figs)} "
-                f"seeds)", by_seed) for n, by_seed in acc if by_seed]
+        acc = []
+        for name, key in (("specialized network", "C_accuracy_at"),
+                          ("generalized network, retrained readout", "F_readout_accuracy_at")):
+            by_seed = [a for fig in figs if (a := _get(fig, "fig3", key))]
+            if by_seed:
+                acc.append((name + _over(len(by_seed), len(figs)), by_seed))
         if acc:
             lines += ["", "Arena classification accuracy at 50 / 100 / 200 s (chance "
                       f"0.01{spread}): " + "; ".join(f"{n} " + " / ".join(

@@ -187,8 +187,16 @@ def write_text(path, text: str, *, overwrite: bool = True, what: str = "path") -
 
 
 def save_figure(fig, path, **savefig_kwargs) -> Path:
-    """``fig.savefig`` to ``path`` atomically, in the format its suffix names."""
+    """``fig.savefig`` to ``path`` atomically, in the format its suffix names.
+
+    A PDF carries no creation date (unless ``metadata`` is passed), so the same figure
+    gives the same bytes on every run and two fresh clones' outputs can be compared with
+    ``cmp``.
+    """
     path = Path(path)
+    fmt = path.suffix.lstrip(".") or "png"
+    if fmt == "pdf":
+        savefig_kwargs.setdefault("metadata", {"CreationDate": None})
     with atomic_path(path, overwrite=True, what="path") as tmp:
-        fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", **savefig_kwargs)
+        fig.savefig(tmp, format=fmt, **savefig_kwargs)
     return path

@@ -176,3 +176,24 @@ def test_the_scan_sees_a_second_mechanism():
     """))
     assert [w for _, w, _ in _direct_writes(old)] == [
         "open(..., 'w')", "json.dump", ".write_text()", "Path.replace"]
+
+
+def test_a_saved_pdf_is_the_same_bytes_on_every_run(tmp_path, monkeypatch):
+    # Without this a PDF carries its creation time, and two fresh clones' figures
+    # (README, "Reproducibility") can no longer be compared byte for byte.
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from hippo_probe._atomic import save_figure
+
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [1, 0])
+    first = save_figure(fig, tmp_path / "a.pdf").read_bytes()
+    time.sleep(1.1)  # the PDF date has a resolution of one second
+    second = save_figure(fig, tmp_path / "b.pdf").read_bytes()
+    plt.close(fig)
+    assert b"CreationDate" not in first
+    assert first == second

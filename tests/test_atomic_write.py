@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 from hippo_probe import _atomic
-from hippo_probe._atomic import atomic_path, remove_stale, temporary_beside, write_text
+from hippo_probe._atomic import (atomic_path, remove_stale, save_figure, temporary_beside,
+                                 write_text)
 
 
 def test_a_failed_write_leaves_the_previous_file_and_no_temporary(tmp_path):
@@ -185,8 +186,6 @@ def test_a_saved_pdf_is_the_same_bytes_on_every_run(tmp_path, monkeypatch):
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from hippo_probe._atomic import save_figure
 
     monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
     fig, ax = plt.subplots()

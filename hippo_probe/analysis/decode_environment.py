@@ -17,13 +17,77 @@ def _samples(rec, t, half_width):
     return np.flatnonzero(np.abs(tt - t) <= half_width)
 
 
-def _fit(x, y, c, max_iter):
+def fit_linear_decoder(x, y, *, c, max_iter=None, tol=1e-4, warm_from=None):
+    """Fit a multinomial logistic regression of labels ``y`` on standardized features ``x``.
+
+    The units are standardized on ``x`` (mean 0, s.d. 1), then the softmax model
+    ``p(e | x) = exp(w_e . z + b_e) / sum_k exp(w_k . z + b_k)``, ``z = (x - mu) / sigma``,
+    is fitted by L-BFGS (scikit-learn) to the minimum of the convex objective
+    ``C * sum_j -log p(e_j | x_j) + |W|^2 / 2``: a unique optimum, reached whatever the
+    start, so the fit is a measurement, not a training run.
+
+    Parameters
+    ----------
+    x : array (n_samples, n_features)
+    y : array (n_samples,)
+        Integer labels.
+    c : float
+        Inverse L2 strength (scikit-learn's ``C``), > 0.
+    max_iter : int, optional
+        Solver iterations (default :attr:`EnvironmentDecodingConfig.max_iter`).
+    tol : float
+        Solver tolerance on the projected gradient.
+    warm_from : sklearn.pipeline.Pipeline, optional
+        A decoder fitted on the same features (another ``c``) whose coefficients start the
+        solver: the same optimum, fewer iterations along a path of ``c``.
+
+    Returns
+    -------
+    sklearn.pipeline.Pipeline
+        ``StandardScaler`` then ``LogisticRegression``; ``n_iter`` and ``converged``
+        are set on it.
+    """
     from sklearn.linear_model import LogisticRegression
     from sklearn.pipeline import make_pipeline
     from sklearn.preprocessing import StandardScaler
 
-    return make_pipeline(StandardScaler(), LogisticRegression(C=c, max_iter=max_iter)).fit(
-        x, y)
+    max_iter = CFG.max_iter if max_iter is None else max_iter
+    scaler = StandardScaler().fit(x)
+    model = LogisticRegression(C=c, max_iter=max_iter, tol=tol,
+                               warm_start=warm_from is not None)
+    z = scaler.transform(x)
+    if warm_from is not None:
+        prev = warm_from[-1]
+        model.coef_, model.intercept_ = prev.coef_.copy(), prev.intercept_.copy()
+        model.classes_ = prev.classes_
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
+    with warnings.catch_warnings():
+        # converged or not is returned (``converged``) rather than warned once per fit
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        model.fit(z, y)
+    pipeline = make_pipeline(scaler, model)
+    pipeline.n_iter = int(np.max(model.n_iter_))
+    pipeline.converged = pipeline.n_iter < max_iter
+    return pipeline
+
+
+def decoder_weights(decoder) -> tuple[np.ndarray, np.ndarray]:
+    """(W (n_classes, n_features), b (n_classes,)) of a fitted decoder on the raw features.
+
+    The standardization is folded into the linear map: ``w_e . (x - mu) / sigma + b_e =
+    (w_e / sigma) . x + (b_e - (w_e / sigma) . mu)``, so a plain linear layer on the raw
+    units gives the decoder's logits.
+    """
+    scaler, model = decoder[0], decoder[-1]
+    w = model.coef_ / scaler.scale_[None, :]
+    b = model.intercept_ - w @ scaler.mean_
+    return w, b
+
+
+def _fit(x, y, c, max_iter):
+    return fit_linear_decoder(x, y, c=c, max_iter=max_iter)
 
 
 def _accuracy(model, x, y) -> float:

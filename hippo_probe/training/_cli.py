@@ -53,6 +53,9 @@ def add_commands(sub):
     p.add_argument("--max-hours", type=float, default=d.max_hours, metavar="H",
                    help="stop before --steps once the run's wall time, summed over resumes, "
                         "passes H hours (default: no cap but the step budget)")
+    p.add_argument("--snapshot-every", type=count(), default=None, metavar="STEPS",
+                   help="save the current parameters every STEPS steps as "
+                        "FOLDER/snapshots/step_NNNNNN.pt (default: no snapshots)")
     p.add_argument("--seed", type=int, default=d.seed,
                    help="seed of the task's splits (which trials exist)")
     p.add_argument("--init-seed", type=int, default=d.init_seed,
@@ -117,7 +120,8 @@ def _train(a):
                          init_from=a.init_from, train_only=a.train_only,
                          precision=a.precision,
                          stop_improvement=a.stop_improvement or None,
-                         max_hours=a.max_hours or None)
+                         max_hours=a.max_hours or None,
+                         snapshot_every=a.snapshot_every)
     log = fit(config, a.out, progress=not a.no_progress, cache_dir=a.cache_dir)
     if "test" in log:
         print(json.dumps(log["test"], indent=1))

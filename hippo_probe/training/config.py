@@ -88,6 +88,12 @@ class TrainConfig:
         a step here with two runs side by side) 40,000 steps are 8.1 h, while a wall-time
         cap would also count the hours a run spent on slower hardware (float32, or bf16
         emulated) and end it steps short.
+    snapshot_every : int or None
+        Save the current parameters every this many steps as
+        ``snapshots/step_NNNNNN.pt`` in the run folder (loadable by
+        :func:`hippo_probe.load_pretrained`), so that what the network holds can be
+        measured along training afterwards (e.g. the arena probe against step). None
+        (default): no snapshots.
     """
 
     task: str = "generalized"
@@ -113,10 +119,11 @@ class TrainConfig:
     precision: str = "auto"
     stop_improvement: float | None = 0.01
     max_hours: float | None = None
+    snapshot_every: int | None = None
 
     #: fields that do not change the parameters of the steps done (may differ on resume)
     RESUMABLE_CHANGES = ("threads", "checkpoint_minutes", "n_test", "precision",
-                         "stop_improvement", "max_hours")
+                         "stop_improvement", "max_hours", "snapshot_every")
 
     def __post_init__(self):
         check_option("task", self.task, TASKS)
@@ -148,6 +155,8 @@ class TrainConfig:
             check_number("stop_improvement", self.stop_improvement, low=0, high=1)
         if self.max_hours is not None:
             check_positive("max_hours", self.max_hours)
+        if self.snapshot_every is not None:
+            check_positive("snapshot_every", self.snapshot_every, integer=True)
 
     def differences(self, other: "TrainConfig") -> dict:
         """Fields that differ and matter for the result: name -> (self, other)."""

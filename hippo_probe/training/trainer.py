@@ -487,6 +487,9 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
                     post["val_acc"] = f"{last_val['mean_accuracy']:.2f}"
             bar.set_postfix(post, refresh=False)
             bar.update(1)
+            if rank == 0 and config.snapshot_every and step % config.snapshot_every == 0:
+                save_network(net, trained_config(), log,
+                             run_dir / "snapshots" / f"step_{step:06d}.pt")
             if time.time() - t_ckpt > 60 * config.checkpoint_minutes:
                 checkpoint()
                 t_ckpt = time.time()

@@ -420,3 +420,31 @@ def test_a_run_being_trained_by_another_process_is_refused(tmp_path):
     fit(TrainConfig(**{**TINY, "steps": 1}), run, cache_dir=tmp_path / "cache",
         progress=False)
     assert (run / "checkpoint.pt").exists()
+
+
+def test_a_resumed_warm_restart_equals_an_uninterrupted_one(uninterrupted, tmp_path):
+    """Continuing a trained network with a fresh schedule (``init_from``) resumes exactly,
+    and its snapshots are the parameters at their steps."""
+    d, _ = uninterrupted
+    base = d / "run" / "network.pt"
+    warm = dict(TINY, init_from=str(base), lr=3e-4, lr_final=3e-5, snapshot_every=2)
+    fit(TrainConfig(**warm), tmp_path / "whole", cache_dir=d / "cache", progress=False)
+    fit(TrainConfig(**warm), tmp_path / "parts", cache_dir=d / "cache", progress=False,
+        stop_after=3)
+    log = fit(TrainConfig(**warm), tmp_path / "parts", cache_dir=d / "cache",
+              progress=False)
+    assert log["resumed_at"] == [3]
+    assert log["base_network"]["file"] == "network.pt"
+    for name in ("network.pt", "checkpoint.pt"):
+        _assert_same(_params(tmp_path / "parts" / name), _params(tmp_path / "whole" / name))
+    snaps = sorted(p.name for p in (tmp_path / "whole" / "snapshots").iterdir())
+    assert snaps == ["step_000002.pt", "step_000004.pt", "step_000006.pt"]
+    for name in snaps:
+        _assert_same(_params(tmp_path / "parts" / "snapshots" / name),
+                     _params(tmp_path / "whole" / "snapshots" / name))
+    # the last snapshot holds the last parameters; the first differs from the base
+    _assert_same(_params(tmp_path / "whole" / "snapshots" / snaps[-1]),
+                 _params(tmp_path / "whole" / "checkpoint.pt"))
+    first = _params(tmp_path / "whole" / "snapshots" / snaps[0])
+    assert not torch.equal(first["lstm.weight_h"], _params(base)["lstm.weight_h"])
+    assert hp.load_pretrained(tmp_path / "whole" / "snapshots" / snaps[0]).task == "specialized"

@@ -1,0 +1,109 @@
+"""Fit the arena readout of the frozen generalized networks to convergence (Fig. 3F).
+
+The protocol is :mod:`hippo_probe.paper.readout`'s: features of each frozen network on
+specialized-task trials, a multinomial logistic regression (L2 strength chosen on
+validation trials) at each training-set size, scored on test trials every 10 s. The
+study's readout reads the units ``h``; the variant (labelled as one) reads a leaky
+average of them, its time constant chosen on validation trials at ``--tau-size`` trials.
+
+    python analyses/arena_readout.py [--world darkness] [--seeds 0 1 2]
+        [--sizes 4000 16000 64000] [--features cache/readout]
+        [--out analyses/data/arena_readout] [--export hippo_probe/pretrained]
+
+Writes ``<out>/<network>_seed<k>.json`` (learning curves, L2 paths, test curves) and,
+with ``--export``, the study's readout at the largest size as
+``<export>/generalized_readout[_seed<k>].pt`` (the compass world's as
+``generalized_compass_readout.pt``).
+"""
+
+import argparse
+import time
+from dataclasses import asdict, replace
+from pathlib import Path
+
+import torch
+
+import hippo_probe as hp
+from hippo_probe.paper import readout as R
+from hippo_probe.paper.config import network_name
+from hippo_probe.training.checkpoint import save_atomic
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def shipped_name(base: str, seed: int) -> str:
+    return base if seed == 0 else f"{base}_seed{seed}"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--world", default="darkness", choices=("darkness", "compass"))
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0])
+    ap.add_argument("--network", default=None,
+                    help="network file or shipped name to read instead of the shipped "
+                         "generalized network (one seed; e.g. a training snapshot)")
+    ap.add_argument("--sizes", type=int, nargs="+", default=list(R.READOUT.sizes))
+    ap.add_argument("--tau-size", type=int, default=16000,
+                    help="training trials at which the variant's time constant is chosen")
+    ap.add_argument("--kinds", nargs="+", default=["h", "leaky"],
+                    choices=("h", "leaky"))
+    ap.add_argument("--features", default=str(ROOT / "cache" / "readout"))
+    ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "arena_readout"))
+    ap.add_argument("--export", default=None, metavar="FOLDER")
+    ap.add_argument("--no-progress", action="store_true")
+    a = ap.parse_args()
+    torch.set_num_threads(1)
+    cfg = replace(R.READOUT, sizes=tuple(a.sizes))
+    base = network_name("generalized", a.world)
+    if a.network:
+        nets = {Path(a.network).stem: hp.load_pretrained(a.network)}
+    else:
+        nets = {shipped_name(base, s): hp.load_pretrained(base, seed=s) for s in a.seeds}
+    for net in nets.values():
+        net.eval()
+    t0 = time.time()
+    for split, n in (("validation", cfg.n_validation), ("test", cfg.n_test),
+                     ("train", max(cfg.sizes))):
+        R.extract_features(nets, split, n, a.features, world=a.world, cfg=cfg,
+                           progress=not a.no_progress)
+    print(f"features: {time.time() - t0:.0f} s", flush=True)
+    for name, net in nets.items():
+        t1 = time.time()
+        res = R.learning_curve(a.features, name, ["h"] if "h" in a.kinds else [], cfg)
+        decoders = res.pop("decoders")
+        if "leaky" in a.kinds:
+            small = tuple(n for n in cfg.sizes if n <= a.tau_size)
+            scan = R.learning_curve(a.features, name, R.feature_kinds(cfg)[1:], cfg,
+                                    sizes=small)
+            scan.pop("decoders")
+            at = {k: v["rows"][-1]["validation_accuracy_late"]
+                  for k, v in scan["kinds"].items()}
+            best = max(at, key=at.get)
+            res["leaky_tau_choice"] = {"train_trials": small[-1],
+                                       "validation_accuracy_late": at, "chosen": best}
+            res["kinds"].update(scan["kinds"])
+            big = tuple(n for n in cfg.sizes if n > a.tau_size)
+            if big:
+                more = R.learning_curve(a.features, name, [best], cfg, sizes=big)
+                more.pop("decoders")
+                res["kinds"][best]["rows"] += more["kinds"][best]["rows"]
+        res.update(network=name, world=a.world, config=asdict(cfg),
+                   fit_seconds=round(time.time() - t1))
+        R.write_json(Path(a.out) / f"{name}.json", res)
+        if a.export and "h" in decoders:
+            seed = int(name.rsplit("seed", 1)[1]) if "_seed" in name else 0
+            target = shipped_name(f"{base}_readout", seed)
+            desc = {"task": "specialized", "world": a.world, "train_only": "classifier",
+                    "init_from": name, "readout": "convex", "features": "h",
+                    "fit_times_s": list(cfg.fit_times),
+                    "train_trials": max(cfg.sizes),
+                    "c": res["kinds"]["h"]["rows"][-1]["c"],
+                    "precision": "fp32"}
+            save_atomic(R.readout_network(net.info["file"], decoders["h"],
+                                          description=desc),
+                        Path(a.export) / f"{target}.pt")
+            print(f"exported {target}", flush=True)
+
+
+if __name__ == "__main__":
+    main()

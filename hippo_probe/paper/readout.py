@@ -1,0 +1,290 @@
+"""The arena readout of a frozen network, fitted as the convex problem it is (Fig. 3F).
+
+The study retrains only the softmax readout of the generalized network on the specialized
+task's 100 familiar arenas and reads its classification late in each trial ("close to
+85%"). With the network frozen this is a multinomial logistic regression on the units:
+convex, with one optimum, so it is fitted to convergence rather than trained by gradient
+steps that stop on a budget. The protocol, with its numbers in :class:`ReadoutConfig`:
+
+1. Features. The frozen network runs on specialized-task trials (train split for the fit,
+   validation split to choose the L2 strength, test split to score) in its own world;
+   its hidden units ``h_t`` are kept at the fit times (every 25 s from 100 s: "late in
+   each trial") on training trials and every 10 s on the others. Features stream to disk
+   in blocks of 1,000 trials (resumable), so memory holds one block at a time while
+   extracting and one training set while fitting.
+2. The study's readout: one linear readout of ``h_t``, trained on the fit times of every
+   training trial at once, scored on each test trial at each time: the Fig. 3F curve.
+3. A labelled variant: the same on a leaky average of the units, the output of a
+   downstream cell integrating them, ``a_t = sum_{s<=t} w_{t-s} h_s / sum_{s<=t}
+   w_{t-s}`` with ``w_k = exp(-k dt / tau)``; ``tau`` chosen on validation trials.
+4. A learning curve over the training-set size (4k, 16k, 64k, ... trials): the readout's
+   accuracy is a property of the network only once it stops rising with more data.
+5. The study's readout at the largest size is shipped as the network's classifier
+   weights (:func:`readout_network`): the standardization folded into one linear layer,
+   so :func:`hippo_probe.record` and the figures use it unchanged.
+
+References
+----------
+Kanitscheider & Fiete (2017), NIPS 30, Fig. 3F. Hastie, Tibshirani & Friedman (2009),
+The Elements of Statistical Learning, 2nd ed., Sect. 4.4.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._atomic import atomic_path, write_text
+from ..analysis.decode_environment import decoder_weights, fit_linear_decoder
+
+
+@dataclass(frozen=True)
+class ReadoutConfig:
+    """The readout protocol's numbers.
+
+    Attributes
+    ----------
+    fit_times : tuple of float
+        Times in trial (s) whose states train the readout: 100-200 s every 25 s, "late in
+        each trial" (the study trains its readout for the late part; 5 states a trial,
+        25 s apart, are far less correlated than consecutive 0.4-s steps).
+    curve_times : tuple of float
+        Times (s) at which validation and test trials are scored: every 10 s, 10-200 s
+        (the Fig. 3F curve).
+    taus : tuple of float
+        Time constants (s) of the leaky-average variant tried on validation trials:
+        10-100 s, from a few contacts apart to half a trial.
+    sizes : tuple of int
+        Training-set sizes of the learning curve (trials of the train split).
+    c_grid : tuple of float
+        Inverse L2 strengths tried, in increasing order (each fit starts from the last);
+        the path stops once validation accuracy falls.
+    n_validation, n_test : int
+        Trials of the validation and test splits.
+    max_iter : int
+        L-BFGS iterations per fit; a fit that needs more is reported as unconverged.
+    block : int
+        Trials per feature file (the trial cache's block).
+    """
+
+    fit_times: tuple = (100.0, 125.0, 150.0, 175.0, 200.0)
+    curve_times: tuple = tuple(float(t) for t in range(10, 201, 10))
+    taus: tuple = (10.0, 25.0, 50.0, 100.0)
+    sizes: tuple = (4000, 16000, 64000)
+    c_grid: tuple = (0.01, 0.1, 1.0, 10.0)
+    n_validation: int = 1000
+    n_test: int = 1000
+    max_iter: int = 2000
+    block: int = 1000
+
+
+READOUT = ReadoutConfig()
+
+
+# ----------------------------------------------------------------------- features
+def leaky_average(h: np.ndarray, dt: float, tau: float) -> np.ndarray:
+    """Normalized exponential moving average over time of ``h`` (T, ...).
+
+    ``a_t = sum_{s<=t} exp(-(t - s) dt / tau) h_s / sum_{s<=t} exp(-(t - s) dt / tau)``:
+    a weighted mean of the past, so ``a_0 = h_0`` and a constant input is returned
+    unchanged (no start-up bias); ``tau -> 0`` gives ``h``, ``tau -> inf`` the running
+    mean.
+    """
+    if not tau > 0:
+        raise ValueError(f"`tau` must be > 0 s; got {tau!r}")
+    decay = np.exp(-dt / tau)
+    out = np.empty(h.shape, np.float32)
+    num = np.zeros(h.shape[1:], np.float64)
+    den = 0.0
+    for t in range(h.shape[0]):
+        num = decay * num + h[t]
+        den = decay * den + 1.0
+        out[t] = num / den
+    return out
+
+
+def feature_kinds(cfg: ReadoutConfig = READOUT) -> tuple[str, ...]:
+    """``"h"`` (the units) and ``"leaky_<tau>"`` (the variant) for every tau."""
+    return ("h", *(f"leaky_{tau:g}" for tau in cfg.taus))
+
+
+def _steps(times, dt) -> np.ndarray:
+    """0-based step index of each time in trial (step s ends at (s + 1) dt)."""
+    return np.rint(np.asarray(times, float) / dt).astype(int) - 1
+
+
+def network_features(net, inputs, dt, times, cfg: ReadoutConfig = READOUT,
+                     chunk: int = 250) -> dict[str, np.ndarray]:
+    """Each feature kind of a frozen network at ``times``: ``{kind: (B, S, H) float32}``."""
+    import torch
+
+    steps = _steps(times, dt)
+    out = {k: [] for k in feature_kinds(cfg)}
+    with torch.no_grad():
+        for lo in range(0, inputs.shape[1], chunk):
+            _, _, h = net(torch.from_numpy(np.ascontiguousarray(inputs[:, lo:lo + chunk])))
+            h = h.numpy()
+            out["h"].append(h[steps].transpose(1, 0, 2))
+            for tau in cfg.taus:
+                out[f"leaky_{tau:g}"].append(
+                    leaky_average(h, dt, tau)[steps].transpose(1, 0, 2))
+    return {k: np.concatenate(v).astype(np.float32) for k, v in out.items()}
+
+
+def _block_path(folder, name, split, block) -> Path:
+    return Path(folder) / name / split / f"block_{block:05d}.npz"
+
+
+def extract_features(nets: dict, split: str, n_trials: int, folder, *, world: str,
+                     cfg: ReadoutConfig = READOUT, progress: bool = True) -> None:
+    """Write the features of every network in ``nets`` on the first ``n_trials``
+    specialized-task trials of ``split`` (world ``world``) under ``folder``.
+
+    One file per network and block of ``cfg.block`` trials, written atomically and
+    skipped when present: an interrupted extraction resumes where it stopped, and the
+    trials of a block are simulated once for all networks.
+    """
+    from tqdm.auto import tqdm
+
+    from ..tasks import make_trials
+
+    times = cfg.fit_times if split == "train" else cfg.curve_times
+    n_blocks = -(-n_trials // cfg.block)
+    for block in tqdm(range(n_blocks), desc=f"features {split}", unit="block",
+                      disable=not progress):
+        todo = {name: net for name, net in nets.items()
+                if not _block_path(folder, name, split, block).exists()}
+        if not todo:
+            continue
+        lo = block * cfg.block
+        batch = make_trials("specialized", min(cfg.block, n_trials - lo), split, 0,
+                            first=lo, world=world)
+        for name, net in todo.items():
+            feats = network_features(net, batch.inputs, batch.dt, times, cfg)
+            with atomic_path(_block_path(folder, name, split, block), overwrite=True,
+                             what="features") as tmp:
+                with open(tmp, "wb") as f:
+                    np.savez(f, environment=batch.environment.astype(np.int16),
+                             times=np.asarray(times), **feats)
+
+
+def load_features(folder, name: str, split: str, n_trials: int, kind: str,
+                  cfg: ReadoutConfig = READOUT) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(x (n_trials, S, H), labels (n_trials,), times (S,)) of one feature kind."""
+    xs, ys, times = [], [], None
+    for block in range(-(-n_trials // cfg.block)):
+        path = _block_path(folder, name, split, block)
+        if not path.exists():
+            raise FileNotFoundError(f"features of {name!r} on {split} trials, block "
+                                    f"{block}, are missing ({path}); extract them first")
+        with np.load(path, allow_pickle=False) as f:
+            xs.append(f[kind])
+            ys.append(f["environment"])
+            times = f["times"]
+    x, y = np.concatenate(xs)[:n_trials], np.concatenate(ys)[:n_trials]
+    return x, y.astype(np.int64), times
+
+
+# ----------------------------------------------------------------------- fits
+def accuracy_by_time(decoder, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Accuracy of ``decoder`` on trials ``x`` (N, S, H) at each of the S times."""
+    n, s, h = x.shape
+    pred = decoder.predict(x.reshape(n * s, h)).reshape(n, s)
+    return (pred == y[:, None]).mean(axis=0)
+
+
+def fit_path(x_train, y_train, x_val, y_val, val_times, cfg: ReadoutConfig = READOUT):
+    """Fit along ``cfg.c_grid``; return (best decoder, its C, [(C, val acc, n_iter,
+    converged)]). Validation accuracy is the mean over the validation times within the
+    fit times' range (late in the trial)."""
+    late = np.asarray(val_times) >= min(cfg.fit_times)
+    n, s, h = x_train.shape
+    x = x_train.reshape(n * s, h)
+    y = np.repeat(y_train, s)
+    best, best_c, best_acc, path, prev = None, None, -1.0, [], None
+    for c in cfg.c_grid:
+        model = fit_linear_decoder(x, y, c=c, max_iter=cfg.max_iter, warm_from=prev)
+        acc = float(accuracy_by_time(model, x_val, y_val)[late].mean())
+        path.append({"c": c, "validation_accuracy": acc, "n_iter": model.n_iter,
+                     "converged": bool(model.converged)})
+        if acc > best_acc:
+            best, best_c, best_acc = model, c, acc
+        elif acc < best_acc:
+            break                      # past the optimum of the L2 strength
+        prev = model
+    return best, best_c, path
+
+
+def learning_curve(folder, name: str, kinds, cfg: ReadoutConfig = READOUT,
+                   sizes=None, progress: bool = True) -> dict:
+    """The readout fitted at each training-set size for each feature kind.
+
+    Returns a JSON-able dict: per kind and size, the L2 path on validation trials, the
+    chosen C, test accuracy at every curve time, and the fitted decoder of the largest
+    size (under ``"decoders"``, not JSON-able; popped by the caller).
+    """
+    sizes = tuple(cfg.sizes if sizes is None else sizes)
+    out = {"sizes": list(sizes), "kinds": {}, "decoders": {}}
+    for kind in kinds:
+        x_val, y_val, val_times = load_features(folder, name, "validation",
+                                                cfg.n_validation, kind, cfg)
+        x_test, y_test, test_times = load_features(folder, name, "test", cfg.n_test,
+                                                   kind, cfg)
+        rows = []
+        for n in sizes:
+            x_tr, y_tr, _ = load_features(folder, name, "train", n, kind, cfg)
+            decoder, c, path = fit_path(x_tr, y_tr, x_val, y_val, val_times, cfg)
+            del x_tr
+            acc = accuracy_by_time(decoder, x_test, y_test)
+            rows.append({"train_trials": n, "c": c, "path": path,
+                         "test_accuracy": acc.tolist(),
+                         "validation_accuracy_late": max(p["validation_accuracy"]
+                                                         for p in path)})
+            out["decoders"][kind] = decoder
+            if progress:
+                print(f"{name} {kind} {n} trials: C={c:g}, test accuracy at "
+                      f"{test_times[-1]:g} s {acc[-1]:.3f}", flush=True)
+        out["kinds"][kind] = {"rows": rows, "times": test_times.tolist()}
+    return out
+
+
+def readout_network(base_file, decoder, *, description: dict) -> dict:
+    """A shipped-network dict: the frozen network of ``base_file`` with the decoder's
+    weights (standardization folded in) as its arena classifier."""
+    import torch
+
+    from ..training.checkpoint import load
+
+    from ..tasks import task_config
+
+    base = load(base_file)
+    w, b = decoder_weights(decoder)
+    classes = np.asarray(decoder.classes_)
+    n_classes = task_config("specialized").n_arenas
+    if classes.min() < 0 or classes.max() >= n_classes:
+        raise ValueError(f"`decoder` classes must be arena ids 0..{n_classes - 1}; got "
+                         f"{classes.min()}..{classes.max()}")
+    # row e of the classifier is arena e; an arena absent from the training trials can
+    # never be predicted (its logit far below any other)
+    weight = np.zeros((n_classes, w.shape[1]), np.float32)
+    bias = np.full(n_classes, -1e4, np.float32)
+    weight[classes], bias[classes] = w, b
+    state = {k: v.clone() for k, v in (base.get("best_model") or base["model"]).items()}
+    state["classifier.weight"] = torch.from_numpy(weight)
+    state["classifier.bias"] = torch.from_numpy(bias)
+    model_config = dict(base["model_config"], n_classes=n_classes)
+    return {"model": state, "model_config": model_config, "task": "specialized",
+            "world": base["world"], "config": description, "class_weight": None,
+            "test": None, "steps_done": None, "finished": True,
+            "base_network": {"file": Path(base_file).name,
+                             "steps_done": base.get("steps_done"),
+                             "finished": base.get("finished")}}
+
+
+def write_json(path, obj) -> None:
+    write_text(Path(path), json.dumps(obj, indent=1), what="out")
+
+

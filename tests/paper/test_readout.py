@@ -1,0 +1,129 @@
+"""The arena readout fitted as a convex problem (hippo_probe.paper.readout)."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from hippo_probe.analysis.decode_environment import decoder_weights, fit_linear_decoder
+from hippo_probe.paper import readout as R
+
+
+def test_the_fit_recovers_a_known_separating_direction():
+    rng = np.random.default_rng(0)
+    direction = rng.normal(size=12)
+    direction /= np.linalg.norm(direction)
+    y = rng.integers(0, 2, 4000)
+    # the classes differ along `direction` only; every unit has its own offset and scale
+    x = rng.normal(size=(4000, 12)) + 1.5 * (2 * y[:, None] - 1) * direction
+    scales = rng.uniform(0.5, 3, 12)
+    x = x * scales + rng.normal(0, 5, 12)
+    dec = fit_linear_decoder(x, y, c=1.0)
+    assert dec.converged
+    w, b = decoder_weights(dec)
+    # on the raw features the folded weights give the pipeline's own decision
+    logits = x @ w.T + b
+    raw_pred = (logits[:, 0] > 0) if w.shape[0] == 1 else logits.argmax(1)
+    assert np.array_equal(raw_pred.astype(int), dec.predict(x))
+    # x = g * scale + offset with g the generating features: a readout of x with weights
+    # w reads g with weights w * scale, which must point along the known direction
+    back = w[0] * scales
+    cos = abs(np.dot(back, direction)) / np.linalg.norm(back)
+    assert cos > 0.95
+    assert np.mean(dec.predict(x) == y) > 0.9
+
+
+def test_a_warm_started_fit_reaches_the_same_optimum():
+    rng = np.random.default_rng(1)
+    y = rng.integers(0, 4, 600)
+    x = rng.normal(size=(600, 6)) + np.eye(4, 6)[y] * 2
+    cold = fit_linear_decoder(x, y, c=1.0, tol=1e-8)
+    warm = fit_linear_decoder(x, y, c=1.0, tol=1e-8,
+                              warm_from=fit_linear_decoder(x, y, c=0.1, tol=1e-8))
+    np.testing.assert_allclose(decoder_weights(warm)[0], decoder_weights(cold)[0],
+                               rtol=1e-3, atol=1e-3)
+
+
+def test_the_leaky_average_is_a_normalized_exponential_mean():
+    rng = np.random.default_rng(2)
+    h = rng.normal(size=(30, 2, 3)).astype(np.float32)
+    a = R.leaky_average(h, 0.4, 2.0)
+    w = np.exp(-0.4 * np.arange(30) / 2.0)
+    t = 17
+    expect = (w[:t + 1][::-1, None, None] * h[:t + 1]).sum(0) / w[:t + 1].sum()
+    np.testing.assert_allclose(a[t], expect, rtol=1e-5)
+    np.testing.assert_allclose(a[0], h[0])
+    const = np.full((10, 1, 1), 0.3, np.float32)
+    np.testing.assert_allclose(R.leaky_average(const, 0.4, 50.0), const, rtol=1e-6)
+    with pytest.raises(ValueError, match="`tau` must be > 0"):
+        R.leaky_average(h, 0.4, 0.0)
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    import torch
+
+    from hippo_probe.model import ModelConfig, Navigator
+
+    torch.manual_seed(0)
+    net = Navigator(ModelConfig(hidden_size=8)).eval()
+    cfg = replace(R.READOUT, block=20, sizes=(20, 40), n_validation=20, n_test=20,
+                  c_grid=(0.1, 1.0), taus=(10.0,), curve_times=(40.0, 100.0, 200.0))
+    folder = tmp_path_factory.mktemp("features")
+    for split, n in (("validation", 20), ("test", 20), ("train", 40)):
+        R.extract_features({"tiny": net}, split, n, folder, world="darkness", cfg=cfg,
+                           progress=False)
+    return net, cfg, folder
+
+
+def test_features_are_stored_by_block_and_not_recomputed(tiny):
+    net, cfg, folder = tiny
+    x, y, times = R.load_features(folder, "tiny", "train", 40, "h", cfg)
+    assert x.shape == (40, len(cfg.fit_times), 8) and y.shape == (40,)
+    assert list(times) == list(cfg.fit_times) and y.max() < 100
+    stamp = (folder / "tiny" / "train" / "block_00001.npz").stat().st_mtime_ns
+    R.extract_features({"tiny": net}, "train", 40, folder, world="darkness", cfg=cfg,
+                       progress=False)
+    assert (folder / "tiny" / "train" / "block_00001.npz").stat().st_mtime_ns == stamp
+    with pytest.raises(FileNotFoundError, match="extract them first"):
+        R.load_features(folder, "tiny", "train", 60, "h", cfg)
+
+
+def test_the_learning_curve_on_a_tiny_recording(tiny):
+    _, cfg, folder = tiny
+    res = R.learning_curve(folder, "tiny", ["h", "leaky_10"], cfg, progress=False)
+    assert set(res["decoders"]) == {"h", "leaky_10"}
+    for kind in ("h", "leaky_10"):
+        rows = res["kinds"][kind]["rows"]
+        assert [r["train_trials"] for r in rows] == [20, 40]
+        for r in rows:
+            assert r["c"] in cfg.c_grid and 1 <= len(r["path"]) <= 2
+            assert len(r["test_accuracy"]) == len(cfg.curve_times)
+            assert all(0 <= a <= 1 for a in r["test_accuracy"])
+
+
+def test_the_exported_readout_gives_the_decoders_logits(tiny, tmp_path):
+    import torch
+
+    import hippo_probe as hp
+    from hippo_probe.training.checkpoint import save_atomic
+    from hippo_probe.training.trainer import save_network
+    from hippo_probe.training import TrainConfig
+
+    net, cfg, folder = tiny
+    base = tmp_path / "base.pt"
+    save_network(net, TrainConfig(task="generalized", hidden_size=8), {}, base)
+    res = R.learning_curve(folder, "tiny", ["h"], cfg, progress=False)
+    dec = res["decoders"]["h"]
+    save_atomic(R.readout_network(base, dec, description={"readout": "convex"}),
+                tmp_path / "readout.pt")
+    out = hp.load_pretrained(tmp_path / "readout.pt")
+    x, _, _ = R.load_features(folder, "tiny", "test", 20, "h", cfg)
+    flat = x.reshape(-1, 8)
+    with torch.no_grad():
+        logits = out.classifier(torch.from_numpy(flat)).numpy()
+    # rows are arena ids, whichever arenas the few training trials happened to visit
+    assert logits.shape[1] == 100 and len(dec.classes_) < 100
+    assert np.array_equal(logits.argmax(1), dec.predict(flat))
+    np.testing.assert_allclose(logits[:, dec.classes_], dec.decision_function(flat),
+                               atol=1e-4)

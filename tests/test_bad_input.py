@@ -377,3 +377,114 @@ def test_record_checks_its_arguments_before_working(argv, words, tmp_path, capsy
     assert main(base + argv) == 2
     assert words.format(existing=existing) in capsys.readouterr().err
     assert not (tmp_path / "new.zarr").exists()
+
+
+# ------------------------------------------------------------------ damaged sessions
+def _session():
+    """A valid 6-trial, 2-arena recording with everything the analyses read."""
+    n_trials, n = 6, 120
+    rng = np.random.default_rng(3)
+    t = np.concatenate([k * 20.0 + 0.1 * np.arange(1, n + 1) for k in range(n_trials)])
+    # a random walk at about 0.1 m/s, folded into the 1 m square
+    walk = np.cumsum(rng.normal(0, 0.01, (n * n_trials, 2)), axis=0)
+    xy = np.abs((walk + 0.5) % 2 - 1) - 0.5
+    env = np.repeat([0, 1, 0, 1, 0, 1], n)
+    r = from_arrays(t, xy, activity=rng.random((n * n_trials, 4)),
+                    head_direction=rng.uniform(-3, 3, n * n_trials),
+                    trial=np.repeat(np.arange(n_trials), n), environment=env)
+    prob = np.full((n * n_trials, 2), 0.25)
+    prob[np.arange(n * n_trials), env] = 0.75
+    cov = np.c_[rng.uniform(0.01, 0.1, (n * n_trials, 2)), rng.normal(0, 0.01, n * n_trials)]
+    return r.assign(
+        estimate=(("time", "space"), xy + 0.01, {"units": "m", "long_name": "estimate"}),
+        class_probability=(("time", "environment_id"), prob,
+                           {"units": "1", "long_name": "class probability"}),
+        pf_cov=(("time", "cov"), cov, {"units": "m^2", "long_name": "PF covariance"}),
+        readout_weight=(("environment_id", "unit"), rng.normal(size=(2, 4)),
+                        {"units": "1", "long_name": "readout weight"})
+    ).assign_coords(cov=("cov", ["xx", "yy", "xy"], {"units": "1", "long_name": "cov"}))
+
+
+def _damage(kind):
+    r = _session()
+    t = r.time.values.copy()
+    if kind == "inf position":
+        pos = r.position.values.copy()
+        pos[7, 0] = np.inf
+        return r.assign(position=(r.position.dims, pos, r.position.attrs)), "position"
+    if kind in ("NaN activity", "text activity", "complex activity"):
+        act = r.activity.values.copy()
+        act[3, 1] = np.nan
+        act = {"NaN activity": act, "text activity": r.activity.values.astype(str),
+               "complex activity": r.activity.values + 1j}[kind]
+        return r.assign(activity=(r.activity.dims, act, r.activity.attrs)), "activity"
+    if kind == "reversed time":
+        t[:120] = t[:120][::-1]
+    elif kind == "duplicate time":
+        t[5] = t[4]
+    elif kind == "NaN time":
+        t[9] = np.nan
+    if kind.endswith("time"):
+        return r.assign_coords(time=("time", t, r.time.attrs)), "time"
+    if kind == "environment changes in a trial":
+        env = r.environment.values.copy()
+        env[60:120] = 1
+        return r.assign_coords(environment=("time", env, r.environment.attrs)), "environment"
+    if kind == "negative dt":
+        return r.assign_attrs(dt=-0.4), "dt"
+    if kind == "text dt":
+        return r.assign_attrs(dt="0.1"), "dt"
+    raise AssertionError(kind)
+
+
+DAMAGE = ["inf position", "NaN activity", "text activity", "complex activity",
+          "reversed time", "duplicate time", "NaN time", "environment changes in a trial",
+          "negative dt", "text dt"]
+ANALYSES = {
+    "ratemaps": lambda r: hp.ratemaps(r, bin_size=0.1),
+    "spatial_information": lambda r: hp.spatial_information(r, n_shuffles=2, bin_size=0.1),
+    "spatial_selectivity": lambda r: hp.spatial_selectivity(r, bin_size=0.1),
+    "place_field_stability": lambda r: hp.place_field_stability(r, bin_size=0.1),
+    "head_direction_tuning": lambda r: hp.head_direction_tuning(r, n_shuffles=2),
+    "remapping_similarity": lambda r: hp.remapping_similarity(r, bin_size=0.1),
+    "context_cells": lambda r: hp.context_cells(r, bin_size=0.1),
+    "decode_covariance": lambda r: hp.decode_covariance(r, n_folds=3),
+    "decode_environment": lambda r: hp.decode_environment(r, times=[5.0], n_folds=3),
+    "correlation_dimension": lambda r: hp.correlation_dimension(r, max_points=200),
+    "intrinsic_dimension": lambda r: hp.intrinsic_dimension(r, max_points=200),
+    "localization_error": lambda r: hp.localization_error(r),
+    "classification_accuracy": lambda r: hp.classification_accuracy(r),
+    "border_score": lambda r: hp.border_score(r, n_shuffles=2, bin_size=0.1),
+    "grid_score": lambda r: hp.grid_score(r, n_shuffles=2, bin_size=0.1),
+    "speed_score": lambda r: hp.speed_score(r, n_shuffles=2),
+    "conjunctive_tuning": lambda r: hp.conjunctive_tuning(r, n_shuffles=2),
+    "classify_cells": lambda r: hp.classify_cells(r, n_shuffles=2, bin_size=0.1),
+    "place_fields": lambda r: hp.place_fields(r, bin_size=0.1),
+    "poisson_spikes": lambda r: hp.poisson_spikes(r.assign_attrs(activity_kind="rate"), 5.0),
+}
+
+
+@pytest.mark.parametrize("analysis", sorted(ANALYSES))
+def test_every_analysis_accepts_the_valid_session(analysis):
+    hp.validate(_session())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ANALYSES[analysis](_session())
+
+
+@pytest.mark.parametrize("kind", DAMAGE)
+@pytest.mark.parametrize("analysis", sorted(ANALYSES))
+def test_every_analysis_refuses_a_damaged_session(analysis, kind):
+    bad, var = _damage(kind)
+    with pytest.raises(RecordingError) as err:
+        hp.validate(bad)
+    with pytest.raises(RecordingError, match=f"`{var}`"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ANALYSES[analysis](bad)
+
+
+def test_an_unknown_activity_kind_is_warned_about():
+    with pytest.warns(UserWarning, match="activity_kind 'spikes', which the analyses do not "
+                                         "know"):
+        hp.ratemaps(_session().assign_attrs(activity_kind="spikes"), bin_size=0.1)

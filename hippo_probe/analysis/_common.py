@@ -9,6 +9,7 @@ import xarray as xr
 
 from .._validators import check_number, check_option, check_seed, check_variables
 from .._version import __version__
+from ..recording.validate import check_analysable
 from .config import CONVENTIONS, SHUFFLE
 
 
@@ -17,13 +18,16 @@ class AnalysisWarning(UserWarning):
 
 
 def check_recording(rec, variables=(), *, why="", name="rec"):
-    """Check that ``rec`` is a recording (xarray Dataset) holding ``variables``."""
+    """Check that ``rec`` is a recording (xarray Dataset) holding ``variables`` and
+    following the rules every analysis relies on
+    (:func:`~hippo_probe.recording.validate.check_analysable`)."""
     if not isinstance(rec, xr.Dataset):
         raise TypeError(
             f"`{name}` must be a recording (an xarray.Dataset, schema v1); "
             f"got {type(rec).__name__}"
         )
     check_variables(name, rec, variables, why=why)
+    rec = check_analysable(rec, name=name)
     if rec.sizes.get("time", 1) == 0:
         raise ValueError(f"`{name}` has 0 samples (its `time` is empty): nothing to "
                          f"analyse" + (f" for {why}" if why else ""))

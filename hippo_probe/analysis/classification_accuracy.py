@@ -48,7 +48,7 @@ def classification_accuracy(rec, probability="class_probability"):
     >>> classification_accuracy(rec).accuracy.values
     array([0.5, 0.5])
     """
-    _common.check_recording(rec, [probability, "environment", "trial_time"],
+    rec = _common.check_recording(rec, [probability, "environment", "trial_time"],
                             why="classification accuracy")
     prob = rec[probability]
     if "environment_id" not in prob.dims:

@@ -161,7 +161,7 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     cfg = CELL_CLASS if config is None else config
     if not isinstance(cfg, CellClassConfig):
         raise TypeError(f"`config` must be a CellClassConfig; got {type(cfg).__name__}")
-    _common.check_recording(rec, ["activity", "position"], why="cell classes")
+    rec = _common.check_recording(rec, ["activity", "position"], why="cell classes")
     n_shuffles = cfg.n_shuffles if n_shuffles is None else n_shuffles
     if isinstance(n_shuffles, (int, np.integer)) and not isinstance(n_shuffles, bool) \
             and n_shuffles < 1:

@@ -231,7 +231,7 @@ def conjunctive_tuning(rec, *, n_shuffles=None, seed=None, percentile=None, thre
     >>> [round(float(v), 1) for v in res.pxd_direction_length]
     [0.0, 0.7]
     """
-    _common.check_recording(rec, ["activity", "position", "head_direction"],
+    rec = _common.check_recording(rec, ["activity", "position", "head_direction"],
                             why="conjunctive tuning")
     n_shuffles = CELL_CLASS.n_shuffles if n_shuffles is None else n_shuffles
     percentile = check_percentile("percentile", CELL_CLASS.conjunctive_percentile

@@ -13,7 +13,7 @@ from .spatial_selectivity import spatial_selectivity
 def _weights(rec, weights):
     """Classifier weights as (class, unit) aligned with ``rec.unit``."""
     if weights is None:
-        _common.check_recording(rec, ["readout_weight"],
+        rec = _common.check_recording(rec, ["readout_weight"],
                                 why="context cells need the classifier's weights; pass "
                                     "`weights` or record them")
         weights = rec["readout_weight"]
@@ -82,7 +82,7 @@ def context_cells(rec, weights=None, *, bin_size=None, min_speed=None):
     >>> round(res.attrs["rank_correlation"], 2)
     -0.8
     """
-    _common.check_recording(rec, ["activity", "position"], why="context cells")
+    rec = _common.check_recording(rec, ["activity", "position"], why="context cells")
     w = _weights(rec, weights)
     strength = np.sqrt((w**2).sum(axis=0))
     n_env = len(np.unique(_common.values(rec["environment"]))) if "environment" in rec.coords \

@@ -135,7 +135,7 @@ def decode_covariance(rec, target="pf_cov", *, n_folds=None, alphas=None, seed=0
     >>> res.r2.values.round(2)
     array([ 1., -0.])
     """
-    _common.check_recording(rec, ["activity", target, "trial"], why="decoding")
+    rec = _common.check_recording(rec, ["activity", target, "trial"], why="decoding")
     tgt = rec[target]
     if tgt.dims[0] != "time":
         tgt = tgt.transpose("time", ...)

@@ -158,7 +158,7 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
     True
     """
     need = ["activity", "environment", "trial", "trial_time"]
-    _common.check_recording(rec, need, why="environment decoding")
+    rec = _common.check_recording(rec, need, why="environment decoding")
     if test is not None:
         _common.check_recording(test, need, why="environment decoding", name="test")
         if test.sizes["unit"] != rec.sizes["unit"]:

@@ -118,7 +118,7 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     >>> round(float(np.degrees(res.preferred_direction[0])))
     57
     """
-    _common.check_recording(rec, ["activity", "head_direction"], why="head-direction tuning")
+    rec = _common.check_recording(rec, ["activity", "head_direction"], why="head-direction tuning")
     n_bins = check_number("n_bins", HEAD_DIRECTION.n_bins if n_bins is None else n_bins,
                           low=2, low_inclusive=True, integer=True)
     sigma = check_number("sigma", sigma, low=0, low_inclusive=True)

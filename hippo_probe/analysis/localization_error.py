@@ -109,7 +109,7 @@ def localization_error(rec, estimate="estimate", *, centre=(0.0, 0.0)):
     array([0.5, 0.5, 0.5, 0.5])
     """
     names = [estimate] if isinstance(estimate, str) else list(estimate)
-    _common.check_recording(rec, ["position", "trial_time", *names],
+    rec = _common.check_recording(rec, ["position", "trial_time", *names],
                             why="localization error")
     centre = check_shape("centre", np.asarray(centre, float), (2,))
     pos = _xy(rec, "position")

@@ -98,7 +98,7 @@ def place_field_stability(rec, *, split="halves", bin_size=None, sigma=None, min
     >>> bool(place_field_stability(rec, bin_size=0.2).stability[0, 0] > 0.99)
     True
     """
-    _common.check_recording(rec, ["activity", "position"], why="place-field stability")
+    rec = _common.check_recording(rec, ["activity", "position"], why="place-field stability")
     check_option("split", split, ("halves", "odd_even"))
     min_bins = STABILITY.min_bins if min_bins is None else min_bins
     codes, envs, how = _split_codes(rec, split)

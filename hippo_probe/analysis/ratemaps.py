@@ -211,7 +211,7 @@ def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent
 
     ``groups = (codes, labels, dim)`` replaces the grouping given by ``by``.
     """
-    _common.check_recording(rec, ["activity", "position"], why="rate maps")
+    rec = _common.check_recording(rec, ["activity", "position"], why="rate maps")
     sigma = check_number("sigma", RATEMAP.sigma if sigma is None else sigma, low=0,
                          low_inclusive=True)
     min_occupancy = check_number(

@@ -115,7 +115,7 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
     >>> sim["mean"].sel(comparison=["same", "different"]).values.round(1)
     array([1. , 0.1])
     """
-    _common.check_recording(rec, ["activity", "position", "trial", "environment"],
+    rec = _common.check_recording(rec, ["activity", "position", "trial", "environment"],
                             why="remapping similarity")
     min_common = check_number(
         "min_common_bins", REMAPPING.min_common_bins if min_common_bins is None

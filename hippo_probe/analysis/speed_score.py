@@ -199,9 +199,9 @@ def speed_score(rec, *, n_shuffles=None, seed=None, percentile=None, threshold=N
     >>> bool(speed_score(rec, n_shuffles=0).speed_score[0] > 0.9)
     True
     """
-    _common.check_recording(rec, ["activity"], why="speed score")
+    rec = _common.check_recording(rec, ["activity"], why="speed score")
     if "speed" not in rec:
-        _common.check_recording(rec, ["position"], why="speed score (no `speed` variable)")
+        rec = _common.check_recording(rec, ["position"], why="speed score (no `speed` variable)")
     n_shuffles = CELL_CLASS.n_shuffles if n_shuffles is None else n_shuffles
     percentile = check_percentile("percentile", CELL_CLASS.speed_percentile
                                   if percentile is None else percentile)

@@ -14,6 +14,7 @@ import xarray as xr
 
 from .._validators import check_nonnegative_int, check_number
 from ..errors import RecordingError
+from .validate import check_analysable
 
 
 def poisson_spikes(rec, mean_rate, seed=0):
@@ -80,6 +81,16 @@ def poisson_spikes(rec, mean_rate, seed=0):
     """
     mean_rate = check_number("mean_rate", mean_rate, low=0)     # > 0 and finite
     seed = check_nonnegative_int("seed", seed)
+    if not isinstance(rec, xr.Dataset):
+        raise TypeError(f"`rec` must be a recording (an xarray.Dataset, schema v1); got "
+                        f"{type(rec).__name__}")
+    if "activity" not in rec.data_vars:
+        raise RecordingError("`rec` must contain `activity` (the rates to draw spikes from)")
+    check_analysable(rec)
+    if rec.sizes.get("unit", 0) == 0 or rec.sizes.get("time", 0) == 0:
+        raise RecordingError(f"`rec.activity` must have at least one unit and one sample; "
+                             f"got {rec.sizes.get('time', 0)} samples x "
+                             f"{rec.sizes.get('unit', 0)} units")
     kind = rec.attrs.get("activity_kind")
     if kind == "spike_count":
         raise RecordingError("`rec` already holds spike counts (activity_kind "

@@ -310,3 +310,110 @@ def check_block(name, values, origin=None):
             idx = where(out)
             _fail(name, f"must be in [0, 1]; got {value_at(idx)} at index {idx}")
     return values
+
+
+def check_analysable(rec, *, name="rec"):
+    """The cheap rules of :func:`validate` that every analysis relies on; raise if broken.
+
+    Run on entry by every public analysis, so that a damaged or mislabelled session is
+    refused rather than analysed into a plausible wrong number. Only what the recording
+    holds is checked (analyses also accept partial recordings, e.g. without a trial
+    table):
+
+    - ``time``: finite, strictly increasing within each trial (across the whole
+      recording when it has no ``trial``);
+    - ``attrs["dt"]``, when present: a real number of seconds, finite and > 0;
+    - ``attrs["activity_kind"]``, when present: a non-empty string; a kind the analyses do
+      not know (:data:`~hippo_probe.recording.schema.ACTIVITY_UNITS`) is warned about, as
+      it is read as a generic signal (no division by ``dt``, no offset for signed units);
+    - ``position``, ``head_direction``: real numbers, no inf (NaN is lost tracking);
+      ``head_direction`` in radians, [-pi, pi);
+    - ``activity``: real numbers (not complex, text or bool), finite where in memory;
+    - ``environment``: one value per trial.
+
+    Costs O(samples) on the per-sample coordinates and on ``position`` and
+    ``head_direction`` (8-16 bytes a sample). A lazy (dask-backed) ``position`` or
+    ``head_direction`` is read here once and returned in memory (every analysis reads
+    them whole anyway); the values of a lazy ``activity`` are not read (its dtype is):
+    NaN in them is caught by ``validate(rec, check_data=True)``, or named by the
+    analysis's own pass (e.g. ``ratemaps`` warns with the unit).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``rec``, or a shallow copy of it with ``position`` and ``head_direction`` loaded
+        when they were lazy: analyses continue with the returned dataset.
+
+    Raises
+    ------
+    RecordingError
+        Naming the variable, the rule and the first offending value.
+    """
+    import warnings
+
+    from .schema import ACTIVITY_UNITS
+
+    attrs = rec.attrs
+    if "dt" in attrs:
+        dt = attrs["dt"]
+        if isinstance(dt, (bool, np.bool_)) or not isinstance(dt, (int, float, np.number)):
+            _fail("dt", f"(dataset attr of `{name}`) must be a number of seconds; got "
+                        f"{type(dt).__name__} {_v(dt)[:40]}")
+        if not (np.isfinite(dt) and dt > 0):
+            _fail("dt", f"(dataset attr of `{name}`) must be a finite number of seconds "
+                        f"> 0; got {_v(dt)}")
+    if "activity_kind" in attrs:
+        kind = attrs["activity_kind"]
+        if not isinstance(kind, str) or not kind:
+            _fail("activity_kind", f"(dataset attr of `{name}`) must be a non-empty "
+                                   f"string, e.g. 'spike_count'; got {_v(kind)}")
+        if kind not in ACTIVITY_UNITS:
+            warnings.warn(f"`{name}` has activity_kind {kind!r}, which the analyses do "
+                          f"not know ({sorted(ACTIVITY_UNITS)}): its activity is read as a "
+                          "generic signal (no division by dt, no offset for signed units)",
+                          UserWarning, stacklevel=4)
+    trial = None
+    if "trial" in rec.coords and rec["trial"].dims == ("time",):
+        trial = np.asarray(rec["trial"].values)
+    if "time" in rec.coords:
+        time = np.asarray(rec["time"].values)
+        if time.dtype.kind not in "iuf":
+            _fail("time", f"must hold seconds as real numbers; got dtype {time.dtype}")
+        if not np.isfinite(time).all():
+            i = _first_bad(~np.isfinite(time))
+            _fail("time", f"must be finite; got {_v(time[i])} at index {i}")
+        step = np.diff(time)
+        bad = step <= 0
+        if trial is not None:
+            bad &= trial[1:] == trial[:-1]
+        if bad.any():
+            i = _first_bad(bad)
+            within = " within a trial" if trial is not None else ""
+            _fail("time", f"must be strictly increasing{within}; time[{i}] = "
+                          f"{_v(time[i])} is followed by time[{i + 1}] = {_v(time[i + 1])}")
+    for var in ("position", "head_direction", "activity"):
+        if var not in rec.variables:
+            continue
+        dtype = rec[var].dtype
+        if dtype.kind not in "iuf":
+            what = {"c": "complex", "b": "bool", "O": "objects", "U": "text",
+                    "S": "text"}.get(dtype.kind, str(dtype))
+            _fail(var, f"must hold real numbers; got {what} (dtype {dtype})")
+    loaded = {}
+    for var in ("position", "head_direction"):
+        if var in rec.data_vars:
+            da = rec[var]
+            if da.chunks is not None:         # read once here; the analysis reuses it
+                da = loaded[var] = da.compute()
+            check_block(var, np.asarray(da.values))
+    if "activity" in rec.variables and rec["activity"].chunks is None:
+        check_block("activity", np.asarray(rec["activity"].values))
+    if trial is not None and "environment" in rec.coords and rec["environment"].dims == ("time",):
+        env = np.asarray(rec["environment"].values)
+        change = (env[1:] != env[:-1]) & (trial[1:] == trial[:-1])
+        if change.any():
+            i = _first_bad(change)
+            _fail("environment", f"must be constant within a trial; trial {_v(trial[i])} "
+                                 f"changes from {_v(env[i])} to {_v(env[i + 1])} at index "
+                                 f"{i + 1}")
+    return rec.assign(loaded) if loaded else rec

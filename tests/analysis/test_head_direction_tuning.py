@@ -80,8 +80,10 @@ def test_signed_activity_shifted_and_stated():
 
 def test_lazy_equals_eager_and_by_environment():
     rec = hd_cell_recording(PREFERRED[:3], KAPPA[:3], n_samples=6000)
+    # two trials, one per environment (an environment never changes within a trial)
     rec = rec.assign_coords(environment=("time", np.repeat([0, 1], 3000),
-                                         rec.environment.attrs))
+                                         rec.environment.attrs),
+                            trial=("time", np.repeat([0, 1], 3000), rec.trial.attrs))
     eager = hp.head_direction_tuning(rec, n_shuffles=5, by="environment")
     lazy = hp.head_direction_tuning(rec.chunk({"time": 1000}), n_shuffles=5, by="environment")
     assert eager.mean_vector_length.dims == ("unit", "environment")

@@ -5,6 +5,7 @@ import pytest
 import xarray as xr
 
 import hippo_probe as hp
+from hippo_probe.errors import RecordingError
 from hippo_probe.analysis import AnalysisWarning
 from hippo_probe.analysis.ratemaps import spatial_grid
 
@@ -182,14 +183,18 @@ def test_fewer_samples_than_bins_warns(place_rec):
     assert maps.count() > 0
 
 
-def test_nan_activity_warns_and_names_the_unit(place_rec):
+def test_nan_activity_is_refused_in_memory_and_named_when_lazy(place_rec):
     rec, _ = place_rec
     act = rec.activity.values.copy()
     act[100, 2] = np.nan
-    bad = rec.assign(activity=(("time", "unit"), act))
+    bad = rec.assign(activity=(("time", "unit"), act, rec.activity.attrs))
+    with pytest.raises(RecordingError, match=r"`activity` must not contain NaN or inf; "
+                                             r"found nan at index \(100, 2\)"):
+        hp.ratemaps(bad, bin_size=0.1, sigma=0)
+    # a lazy recording's values are not read by the entry check: the map's pass names it
     with pytest.warns(AnalysisWarning, match=r"NaN or inf for units \[np.int64\(2\)\]|"
                                               r"NaN or inf for units \[2\]"):
-        hp.ratemaps(bad, bin_size=0.1, sigma=0)
+        hp.ratemaps(bad.chunk({"time": 500}), bin_size=0.1, sigma=0)
 
 
 def test_quiet_on_good_input(place_rec):

@@ -53,7 +53,8 @@ def test_equals_brute_force_definition():
 def test_by_environment_and_lazy():
     rec, _ = _binned_function_recording(0.5, n=8000)
     env = np.repeat([0, 1], 4000)
-    rec = rec.assign_coords(environment=("time", env, rec.environment.attrs))
+    rec = rec.assign_coords(environment=("time", env, rec.environment.attrs),
+                            trial=("time", env, rec.trial.attrs))    # a trial per arena
     eager = hp.spatial_selectivity(rec, bin_size=BIN, by="environment")
     lazy = hp.spatial_selectivity(rec.chunk({"time": 1500}), bin_size=BIN, by="environment")
     assert eager.selectivity.dims == ("unit", "environment")

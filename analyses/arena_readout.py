@@ -84,7 +84,8 @@ def main():
             res["kinds"].update(scan["kinds"])
             big = tuple(n for n in cfg.sizes if n > a.tau_size)
             if big:
-                more = R.learning_curve(a.features, name, [best], cfg, sizes=big)
+                more = R.learning_curve(a.features, name, [best], cfg, sizes=big,
+                                        start_c=scan["kinds"][best]["rows"][-1]["c"])
                 more.pop("decoders")
                 res["kinds"][best]["rows"] += more["kinds"][best]["rows"]
         res.update(network=name, world=a.world, config=asdict(cfg),

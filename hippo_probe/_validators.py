@@ -27,6 +27,20 @@ def check_option(name: str, value, allowed: Iterable):
     return value
 
 
+def check_bool(name: str, value, *, allow_none: bool = False):
+    """``value`` if it is a bool (numpy's included; None too when ``allow_none``).
+
+    A string is refused rather than read by its truth: ``"no"`` and ``"False"`` are
+    truthy and would silently flip the option.
+    """
+    if value is None and allow_none:
+        return None
+    if not isinstance(value, (bool, np.bool_)):
+        expected = "True, False or None" if allow_none else "True or False"
+        raise TypeError(f"`{name}` must be {expected}; got {_fmt(value)}")
+    return bool(value)
+
+
 def check_number(name: str, value, *, low=None, high=None, low_inclusive=False,
                  high_inclusive=True, integer=False):
     """Return ``value`` as a Python number after range checks.

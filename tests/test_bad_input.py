@@ -488,3 +488,83 @@ def test_an_unknown_activity_kind_is_warned_about():
     with pytest.warns(UserWarning, match="activity_kind 'spikes', which the analyses do not "
                                          "know"):
         hp.ratemaps(_session().assign_attrs(activity_kind="spikes"), bin_size=0.1)
+
+
+# ------------------------------------------------------------------ too little data
+@pytest.mark.parametrize("analysis", ["spatial_information", "head_direction_tuning",
+                                      "grid_score", "border_score", "conjunctive_tuning",
+                                      "classify_cells"])
+def test_shuffles_on_a_one_sample_recording_name_the_minimum(analysis):
+    one = _session().isel(time=slice(0, 1))
+    with pytest.raises(ValueError, match="need a recording of at least 4 samples; got 1"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ANALYSES[analysis](one)
+
+
+@pytest.mark.parametrize("analysis", ["speed_score", "conjunctive_tuning",
+                                      "decode_covariance", "poisson_spikes",
+                                      "decode_environment", "intrinsic_dimension",
+                                      "ratemaps", "head_direction_tuning"])
+def test_a_recording_without_units_is_refused(analysis):
+    empty = _session().isel(unit=slice(0, 0))
+    with pytest.raises(ValueError, match="at least one unit"):
+        ANALYSES[analysis](empty)
+
+
+def test_nested_cross_validation_needs_three_folds():
+    with pytest.raises(ValueError, match="`n_folds` must be >= 3: one fold is held out"):
+        hp.decode_covariance(_session(), n_folds=2)
+    assert np.isfinite(hp.decode_covariance(_session(), n_folds=3).r2).all()
+
+
+@pytest.mark.parametrize("times", [None, [1e6]])
+def test_decoding_at_times_no_trial_reaches_warns_and_says_why(times):
+    # trials of 12 s (their last sample 11.9 s after the first): the default times (50, 100, 200 s) and 1e6 s fall after every trial
+    with pytest.warns(AnalysisWarning, match="decoding accuracy is NaN .* no sample at"):
+        res = hp.decode_environment(_session(), times=times, n_folds=3)
+    assert np.isnan(res.accuracy).all()
+    assert "the longest trial lasts 11.9 s" in next(iter(res.attrs["nan_reasons"].values()))
+
+
+# ------------------------------------------------------------------ options by type
+@pytest.mark.parametrize("call, words", [
+    (lambda: hp.remapping_similarity(_session(), center_units="no"),
+     "`center_units` must be True or False; got 'no'"),
+    (lambda: hp.validate(_session(), check_data="yes"),
+     "`check_data` must be True, False or None; got 'yes'"),
+])
+def test_a_string_is_not_taken_for_a_bool(call, words):
+    with pytest.raises(TypeError, match=re.escape(words)):
+        call()
+
+
+def test_save_and_export_refuse_a_string_for_overwrite(tmp_path):
+    with pytest.raises(TypeError, match="`overwrite` must be True or False; got 'no'"):
+        save_recording(_session(), tmp_path / "r.zarr", overwrite="no")
+    assert not list(tmp_path.iterdir())
+
+
+# ------------------------------------------------------------------ accepted nonsense
+def test_nonsense_options_and_inputs_are_refused(tmp_path):
+    r = _session()
+    with pytest.raises(ValueError, match="`min_bins` must be >= 2"):
+        hp.place_field_stability(r, bin_size=0.1, min_bins=-1)
+    with pytest.raises(ValueError, match="`weights` must not contain NaN or inf"):
+        hp.context_cells(r, np.full((2, 4), np.nan), bin_size=0.1)
+    with pytest.raises(ValueError, match="must hold probabilities .* sum to 0"):
+        hp.classification_accuracy(r.assign(class_probability=r.class_probability * 0))
+    save_recording(r, tmp_path / "r.zarr")
+    for chunks in (-1, 0, True, {"time": 0}):
+        with pytest.raises(ValueError, match="`chunks`"):
+            open_recording(tmp_path / "r.zarr", chunks=chunks)
+    with pytest.raises(ValueError, match="`dt` must be a number of seconds > 0; got '0.1'"):
+        from_arrays(T, XY, activity=np.ones((400, 1)), dt="0.1")
+
+
+def test_suspicious_units_are_warned_about():
+    with pytest.warns(UserWarning, match="it looks like degrees"):
+        from_arrays(T, XY, activity=np.ones((400, 1)),
+                    head_direction=np.linspace(0, 359, 400))
+    with pytest.warns(UserWarning, match="every spike of 1 of 2 units .* falls outside"):
+        from_arrays(T, XY, spike_times=[[1.0, 2.0], [1e5, 2e5]])

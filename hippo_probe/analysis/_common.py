@@ -177,8 +177,10 @@ def circular_shifts(n: int, dt: float, n_shuffles: int, seed: int | None) -> np.
                               integer=True)
     low = int(round(SHUFFLE.min_shift / dt))
     low = min(low, n // 4)
-    if n_shuffles and n - 2 * low < 1:
-        raise ValueError(f"`n_shuffles` needs a recording of at least 4 samples; got {n}")
+    if n_shuffles and n < 4:
+        raise ValueError(f"`n_shuffles` = {n_shuffles} time-shift shuffles need a recording "
+                         f"of at least 4 samples; got {n} (pass n_shuffles=0 to skip the "
+                         "significance test)")
     rng = np.random.default_rng(SHUFFLE.seed if seed is None else check_seed("seed", seed))
     return rng.integers(max(low, 1), n - max(low, 1) + 1, size=n_shuffles)
 

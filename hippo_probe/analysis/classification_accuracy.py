@@ -6,6 +6,7 @@ import numpy as np
 import xarray as xr
 
 from . import _common
+from .config import CONVENTIONS
 from .localization_error import trial_time_average
 
 
@@ -65,6 +66,16 @@ def classification_accuracy(rec, probability="class_probability"):
     valid = np.isfinite(prob).any(axis=1)
     if not valid.any():
         raise ValueError(f"`rec.{probability}` is all NaN: accuracy cannot be computed")
+    # a posterior over the environments: >= 0 and summing to 1 (float32 rounding aside);
+    # anything else (all zeros, logits, percentages) would give a plausible wrong argmax
+    total = np.nansum(prob, axis=1)
+    off = valid & ((np.abs(total - 1) > CONVENTIONS.probability_tolerance)
+                   | (np.nanmin(np.where(valid[:, None], prob, 0.0), axis=1) < 0))
+    if off.any():
+        i = int(np.flatnonzero(off)[0])
+        raise ValueError(f"`rec.{probability}` must hold probabilities (>= 0, summing to 1 "
+                         f"over `environment_id` at each sample); at index {i} they sum to "
+                         f"{total[i]:.6g} (min {np.nanmin(prob[i]):.6g})")
     best = ids[np.argmax(np.where(np.isfinite(prob), prob, -np.inf), axis=1)]
     true_col = np.searchsorted(ids, env) if np.all(np.diff(ids) > 0) else \
         np.array([np.flatnonzero(ids == e)[0] for e in env])

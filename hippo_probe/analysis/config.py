@@ -34,12 +34,17 @@ class RecordingConventions:
         Kinds without counting noise (a network's units): with many samples any tuning at
         all beats time-shift shuffles, so :func:`~hippo_probe.analysis.classify_cells`
         warns on them and points to :func:`hippo_probe.poisson_spikes`.
+    probability_tolerance : float
+        How far a sample's class probabilities may sum from 1 (1e-3: a float32 softmax
+        over 100 classes is off by ~1e-6; all zeros, logits or percentages are off by far
+        more).
     """
 
     signed_kinds: tuple = ("lstm_hidden",)
     noise_free_kinds: tuple = ("lstm_hidden",)
     spike_kinds: tuple = ("spike_count",)
     nonnegative_kinds: tuple = ("spike_count", "rate")
+    probability_tolerance: float = 1e-3
 
 
 @dataclass(frozen=True)

@@ -6,6 +6,7 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
+from .._validators import check_finite
 from . import _common
 from .spatial_selectivity import spatial_selectivity
 
@@ -24,13 +25,14 @@ def _weights(rec, weights):
         if "unit" in weights.coords and "unit" in rec.coords:
             weights = weights.sel(unit=rec["unit"].values)
         other = next(d for d in weights.dims if d != "unit")
-        return np.asarray(weights.transpose(other, "unit").values, float)
+        return check_finite("weights", np.asarray(weights.transpose(other, "unit").values,
+                                                  float))
     w = np.asarray(weights, float)
     n_units = rec.sizes["unit"]
     if w.ndim != 2 or w.shape[1] != n_units:
         raise ValueError(f"`weights` must have shape (n_classes, n_units={n_units}); got "
                          f"{w.shape}")
-    return w
+    return check_finite("weights", w)
 
 
 def context_cells(rec, weights=None, *, bin_size=None, min_speed=None):

@@ -150,8 +150,13 @@ def decode_covariance(rec, target="pf_cov", *, n_folds=None, alphas=None, seed=0
     valid = np.isfinite(y).all(axis=1)
     trial = _common.values(rec["trial"])
     trials = np.unique(trial[valid])
-    n_folds = check_number("n_folds", DECODING.n_folds if n_folds is None else n_folds, low=2,
-                           low_inclusive=True, integer=True)
+    n_folds = DECODING.n_folds if n_folds is None else n_folds
+    if isinstance(n_folds, (int, np.integer)) and not isinstance(n_folds, bool) \
+            and n_folds == 2:
+        raise ValueError("`n_folds` must be >= 3: one fold is held out for the score and "
+                         "the ridge strength is chosen by cross-validation among the "
+                         "others, which needs at least two; got 2")
+    n_folds = check_number("n_folds", n_folds, low=3, low_inclusive=True, integer=True)
     if len(trials) < n_folds:
         raise ValueError(f"`n_folds` must be <= the number of trials with a finite "
                          f"`{target}` ({len(trials)}); got {n_folds}")

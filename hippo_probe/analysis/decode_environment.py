@@ -180,20 +180,31 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
     if test is None and n_trials < n_folds:
         raise ValueError(f"cross-validation by trial needs at least `n_folds` = {n_folds} "
                          f"trials; `rec` has {n_trials}")
-    acc, train_acc, scored = [], [], []
+    acc, train_acc, scored, reasons = [], [], [], []
+    longest = float(np.max(_common.values(rec["trial_time"])))
     for t in times:
         fit_idx = _samples(rec, t, (window + 0.5) * dt)
         at_idx = _samples(rec, t, 0.5 * dt)
-        if not len(at_idx) or len(np.unique(env[fit_idx])) < 2:
+        reason = None
+        if not len(at_idx):
+            reason = (f"no sample at {t:g} s in any trial (the longest trial lasts "
+                      f"{longest:g} s)")
+        elif len(np.unique(env[fit_idx])) < 2:
+            reason = "the training samples at this time come from one environment only"
+        if reason:
             acc.append(np.nan)
             train_acc.append(np.nan)
             scored.append(0)
+            reasons.append(reason)
             continue
+        reasons.append(None)
         x_fit = np.asarray(act.isel(time=fit_idx).values, np.float64)
         x_at = np.asarray(act.isel(time=at_idx).values, np.float64)
         if test is not None:
             model = _fit(x_fit, env[fit_idx], c, CFG.max_iter)
             test_idx = _samples(test, t, 0.5 * _common.sample_dt(test))
+            if not len(test_idx):
+                reasons[-1] = f"no sample at {t:g} s in any trial of `test`"
             y_test = _common.values(test["environment"])[test_idx]
             x_test = np.asarray(_common.activity(test).isel(time=test_idx).values,
                                 np.float64)
@@ -237,4 +248,6 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
         validation=("separate test recording" if test is not None
                     else f"{n_folds}-fold by trial"),
         model="multinomial logistic regression on standardized units (scikit-learn)")
+    out.attrs = _common.report_nan(out.attrs, [f"{t:g} s" for t in times], reasons,
+                                   "decoding accuracy")
     return out

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validators import check_option
+from .._validators import check_number, check_option
 from . import _common
 from .config import STABILITY
 from .ratemaps import _ratemap_parts
@@ -100,7 +100,9 @@ def place_field_stability(rec, *, split="halves", bin_size=None, sigma=None, min
     """
     rec = _common.check_recording(rec, ["activity", "position"], why="place-field stability")
     check_option("split", split, ("halves", "odd_even"))
-    min_bins = STABILITY.min_bins if min_bins is None else min_bins
+    # a correlation needs at least 2 bins visited in both halves
+    min_bins = check_number("min_bins", STABILITY.min_bins if min_bins is None else min_bins,
+                            low=2, low_inclusive=True, integer=True)
     codes, envs, how = _split_codes(rec, split)
     labels = np.arange(2 * len(envs))
     parts = _ratemap_parts(rec, bin_size=bin_size, sigma=sigma, min_occupancy=None,

@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from .._validators import check_number, check_seed
+from .._validators import check_bool, check_number, check_seed
 from . import _common
 from .config import REMAPPING
 from .ratemaps import _ratemap_parts
@@ -115,6 +115,7 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
     >>> sim["mean"].sel(comparison=["same", "different"]).values.round(1)
     array([1. , 0.1])
     """
+    center_units = check_bool("center_units", center_units)
     rec = _common.check_recording(rec, ["activity", "position", "trial", "environment"],
                             why="remapping similarity")
     min_common = check_number(

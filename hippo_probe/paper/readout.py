@@ -61,7 +61,8 @@ class ReadoutConfig:
         Training-set sizes of the learning curve (trials of the train split).
     c_grid : tuple of float
         Inverse L2 strengths tried, in increasing order (each fit starts from the last);
-        the path stops once validation accuracy falls.
+        the path stops once validation accuracy falls. Along the learning curve a larger
+        training set starts its path at the C chosen for the smaller one.
     n_validation, n_test : int
         Trials of the validation and test splits.
     max_iter : int
@@ -196,16 +197,18 @@ def accuracy_by_time(decoder, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return (pred == y[:, None]).mean(axis=0)
 
 
-def fit_path(x_train, y_train, x_val, y_val, val_times, cfg: ReadoutConfig = READOUT):
-    """Fit along ``cfg.c_grid``; return (best decoder, its C, [(C, val acc, n_iter,
-    converged)]). Validation accuracy is the mean over the validation times within the
-    fit times' range (late in the trial)."""
+def fit_path(x_train, y_train, x_val, y_val, val_times, cfg: ReadoutConfig = READOUT,
+             start_c=None):
+    """Fit along ``cfg.c_grid`` (from ``start_c`` on, if given); return (best decoder, its
+    C, [(C, val acc, n_iter, converged)]). Validation accuracy is the mean over the
+    validation times within the fit times' range (late in the trial)."""
     late = np.asarray(val_times) >= min(cfg.fit_times)
     n, s, h = x_train.shape
     x = x_train.reshape(n * s, h)
     y = np.repeat(y_train, s)
+    grid = [c for c in cfg.c_grid if start_c is None or c >= start_c]
     best, best_c, best_acc, path, prev = None, None, -1.0, [], None
-    for c in cfg.c_grid:
+    for c in grid:
         model = fit_linear_decoder(x, y, c=c, max_iter=cfg.max_iter, warm_from=prev)
         acc = float(accuracy_by_time(model, x_val, y_val)[late].mean())
         path.append({"c": c, "validation_accuracy": acc, "n_iter": model.n_iter,
@@ -219,7 +222,7 @@ def fit_path(x_train, y_train, x_val, y_val, val_times, cfg: ReadoutConfig = REA
 
 
 def learning_curve(folder, name: str, kinds, cfg: ReadoutConfig = READOUT,
-                   sizes=None, progress: bool = True) -> dict:
+                   sizes=None, progress: bool = True, start_c=None) -> dict:
     """The readout fitted at each training-set size for each feature kind.
 
     Returns a JSON-able dict: per kind and size, the L2 path on validation trials, the
@@ -233,10 +236,13 @@ def learning_curve(folder, name: str, kinds, cfg: ReadoutConfig = READOUT,
                                                 cfg.n_validation, kind, cfg)
         x_test, y_test, test_times = load_features(folder, name, "test", cfg.n_test,
                                                    kind, cfg)
-        rows = []
+        rows, c = [], start_c
         for n in sizes:
             x_tr, y_tr, _ = load_features(folder, name, "train", n, kind, cfg)
-            decoder, c, path = fit_path(x_tr, y_tr, x_val, y_val, val_times, cfg)
+            # more data needs less regularization: the best C of a larger training set is
+            # not below that of a smaller one, so its path starts there
+            decoder, c, path = fit_path(x_tr, y_tr, x_val, y_val, val_times, cfg,
+                                        start_c=c)
             del x_tr
             acc = accuracy_by_time(decoder, x_test, y_test)
             rows.append({"train_trials": n, "c": c, "path": path,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .._angles import wrap_angle
@@ -71,13 +73,24 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop):
     is_last = np.zeros(time.size, dtype=bool)
     is_last[stops - 1] = True
     counts = np.zeros((time.size, len(spike_times)), dtype=np.float32)
+    lost = []
     for u, spikes in enumerate(spike_times):
-        spikes = check_finite(f"spike_times[{u}]", np.asarray(spikes, dtype=float).ravel())
+        spikes = check_finite(f"spike_times[{u}]", check_real(
+            f"spike_times[{u}]", spikes).astype(float).ravel())
         i = np.searchsorted(left, spikes, side="right") - 1
         inside = i >= 0
-        i, spikes = i[inside], spikes[inside]
-        inside = (spikes < right[i]) | ((spikes == right[i]) & is_last[i])
+        i, spikes_in = i[inside], spikes[inside]
+        inside = (spikes_in < right[i]) | ((spikes_in == right[i]) & is_last[i])
         counts[:, u] = np.bincount(i[inside], minlength=time.size)
+        if spikes.size and not inside.any():
+            lost.append(u)
+    if lost:
+        # every spike of a unit outside the samples' span: most often spike times in
+        # another clock or unit (ms vs s) than `time`
+        warnings.warn(f"every spike of {len(lost)} of {len(spike_times)} units (e.g. unit "
+                      f"index {lost[0]}) falls outside the recording's trials "
+                      f"([{time[0]:.6g}, {time[-1]:.6g}] s): are `spike_times` in seconds "
+                      f"on the same clock as `time`?", UserWarning, stacklevel=3)
     return counts
 
 
@@ -202,6 +215,10 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
 
     if "dt" in attrs:
         dt = attrs.pop("dt")
+        if isinstance(dt, (bool, np.bool_)) or not isinstance(dt, (int, float, np.number)) \
+                or not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"`dt` must be a number of seconds > 0; got {dt!r}")
+        dt = float(dt)
     else:
         within = np.diff(time)[np.diff(trial) == 0]
         if within.size == 0:
@@ -242,5 +259,10 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
         head_direction = check_shape("head_direction", check_real(
             "head_direction", head_direction).astype(float), (n,))
         check_finite("head_direction", head_direction, allow_nan=True)
+        if np.nanmax(np.abs(head_direction), initial=0.0) > 2 * np.pi + 1e-9:
+            warnings.warn(f"`head_direction` spans up to {np.nanmax(head_direction):.4g}, "
+                          f"more than 2 pi: it looks like degrees; the schema's head "
+                          f"direction is in radians (pass np.deg2rad(...))", UserWarning,
+                          stacklevel=2)
         rec["head_direction"] = "time", wrap_angle(head_direction)
     return validate(annotate(rec))

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .._atomic import atomic_path
-from .._validators import check_option, check_path
+from .._validators import check_bool, check_option, check_path
 from ..errors import RecordingError
 from .._angles import wrap_angle
 from .arrays import LENGTH_UNITS, bin_spikes, check_time
@@ -604,6 +604,7 @@ def to_nwb(rec, path, overwrite=False):
     >>> to_nwb(rec, "session.nwb")                      # doctest: +SKIP
     >>> back = from_nwb("session.nwb", epoch=None)       # doctest: +SKIP
     """
+    overwrite = check_bool("overwrite", overwrite)
     pynwb, Position, CompassDirection, SpatialSeries = _nwb_classes()
     from hdmf.common import DynamicTable, VectorData
     from pynwb.epoch import TimeIntervals

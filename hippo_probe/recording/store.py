@@ -16,7 +16,7 @@ from dask.array.core import getter as dask_getter
 from zarr.codecs import BloscCodec, Crc32cCodec
 
 from .._atomic import OLD, atomic_path, remove_stale
-from .._validators import check_path
+from .._validators import check_bool, check_path
 from ..errors import RecordingError
 from .config import COMPLETE_MARKER, DEFAULTS
 from .layout import is_trial_aligned, trial_aligned_chunks, trial_blocks
@@ -175,6 +175,7 @@ def save_recording(rec, path, overwrite=False, *, config=DEFAULTS, storage_optio
     >>> open_recording(path).activity.shape
     (50, 3)
     """
+    overwrite = check_bool("overwrite", overwrite)
     validate(rec)
     if _is_url(path):
         _save_url(rec, path, overwrite, config, storage_options)
@@ -274,9 +275,16 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     >>> rec = open_recording("recordings/A2929-200711.zarr")       # doctest: +SKIP
     >>> rec.activity.groupby("trial").mean().compute()              # doctest: +SKIP
     """
-    if not (chunks == "trials" or chunks is None or isinstance(chunks, (dict, int))):
+    if not (chunks == "trials" or chunks is None or isinstance(chunks, (dict, int))) \
+            or isinstance(chunks, bool):
         raise ValueError(f"`chunks` must be 'trials', a dict of chunk sizes per dimension, "
                          f"an int or None; got {chunks!r}")
+    sizes = chunks.values() if isinstance(chunks, dict) else [chunks]
+    for size in sizes:
+        if isinstance(size, bool) or (isinstance(size, (int, np.integer)) and size < 1):
+            raise ValueError(f"`chunks` sizes must be whole numbers of samples >= 1 (a "
+                             f"chunk of the whole recording would defeat lazy reading); "
+                             f"got {chunks!r}")
     if not _is_url(path):
         local = _local(path)
         remove_stale(local.parent)       # temporaries of saves here that died

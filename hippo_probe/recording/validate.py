@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._validators import check_bool
 from ..errors import RecordingError
 from .config import DEFAULTS
 from .layout import trial_blocks
@@ -86,6 +87,7 @@ def validate(rec, *, check_data=None, config=DEFAULTS):
     """
     if not isinstance(rec, xr.Dataset):
         raise RecordingError(f"a recording must be an xarray.Dataset; got {type(rec).__name__}")
+    check_data = check_bool("check_data", check_data, allow_none=True)
     _check_attrs(rec)
     _check_variables(rec)
     _check_time(rec)
@@ -328,7 +330,8 @@ def check_analysable(rec, *, name="rec"):
       it is read as a generic signal (no division by ``dt``, no offset for signed units);
     - ``position``, ``head_direction``: real numbers, no inf (NaN is lost tracking);
       ``head_direction`` in radians, [-pi, pi);
-    - ``activity``: real numbers (not complex, text or bool), finite where in memory;
+    - ``activity``: real numbers (not complex, text or bool), at least one unit, finite
+      where in memory;
     - ``environment``: one value per trial.
 
     Costs O(samples) on the per-sample coordinates and on ``position`` and
@@ -399,6 +402,10 @@ def check_analysable(rec, *, name="rec"):
             what = {"c": "complex", "b": "bool", "O": "objects", "U": "text",
                     "S": "text"}.get(dtype.kind, str(dtype))
             _fail(var, f"must hold real numbers; got {what} (dtype {dtype})")
+    if "activity" in rec.data_vars and 0 in rec["activity"].shape:
+        sizes = dict(rec["activity"].sizes)
+        if sizes.get("unit", 1) == 0:
+            _fail("activity", f"(of `{name}`) must have at least one unit; got 0 units")
     loaded = {}
     for var in ("position", "head_direction"):
         if var in rec.data_vars:

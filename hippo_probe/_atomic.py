@@ -138,6 +138,19 @@ def _appeared(what: str, dest: Path) -> str:
             f"it was kept. Pass overwrite=True to replace it")
 
 
+def make_parent(dest, what: str = "path") -> None:
+    """Create the folder ``dest`` goes into (and its parents), or say which part of the
+    path is in the way (a file where a folder is needed)."""
+    dest = Path(dest)
+    try:
+        dest.parent.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        blocker = next((p for p in [dest.parent, *dest.parent.parents]
+                        if p.exists() and not p.is_dir()), dest.parent)
+        raise NotADirectoryError(f"`{what}` {str(dest)!r} cannot be written: "
+                                 f"{str(blocker)!r} is a file, not a folder") from None
+
+
 @contextmanager
 def atomic_path(dest, *, overwrite: bool = False, what: str = "path"):
     """Context manager yielding a temporary path to write; moved to ``dest`` on success.
@@ -166,7 +179,7 @@ def atomic_path(dest, *, overwrite: bool = False, what: str = "path"):
     if (dest.exists() or dest.is_symlink()) and not overwrite:
         raise FileExistsError(f"`{what}` already exists: {dest}; pass overwrite=True to "
                               f"replace it")
-    dest.parent.mkdir(parents=True, exist_ok=True)
+    make_parent(dest, what)
     remove_stale(dest.parent)
     tmp = temporary_beside(dest)
     try:

@@ -568,3 +568,42 @@ def test_suspicious_units_are_warned_about():
                     head_direction=np.linspace(0, 359, 400))
     with pytest.warns(UserWarning, match="every spike of 1 of 2 units .* falls outside"):
         from_arrays(T, XY, spike_times=[[1.0, 2.0], [1e5, 2e5]])
+
+
+# ------------------------------------------------------------------ messages, not internals
+def test_wrong_kinds_of_input_get_messages_not_internal_errors(tmp_path):
+    r = _session()
+    cases = [
+        (lambda: hp.ratemaps(r, extent="x"), TypeError, "`extent` must hold real numbers"),
+        (lambda: hp.localization_error(r, centre="x"), TypeError,
+         "`centre` must hold real numbers"),
+        (lambda: hp.localization_error(r, estimate="activity"), ValueError,
+         "`rec.activity` must be a position"),
+        (lambda: hp.correlation_dimension(np.array([["a", "b"]] * 50)), TypeError,
+         "`rec_or_array` must hold real numbers"),
+        (lambda: from_arrays(np.array(["a"] * 10), np.zeros((10, 2)),
+                             activity=np.ones((10, 1))), TypeError,
+         "`time` must hold real numbers"),
+        (lambda: hp.speed_score(r.assign(position=(("time", "xyz"), np.c_[
+            r.position.values, r.position.values[:, :1]])), n_shuffles=2), RecordingError,
+         "`position` (of `rec`) must have dims ('time', 'space')"),
+        (lambda: hp.border_score(r, walls=np.full((4, 2), np.nan), n_shuffles=2,
+                                 bin_size=0.1), ValueError, "`walls` must not contain NaN"),
+        (lambda: hp.poisson_spikes(np.ones((10, 2)), 5.0), TypeError,
+         "`rec` must be a recording"),
+        (lambda: hp.poisson_spikes(r.isel(time=slice(0, 0)).assign_attrs(
+            activity_kind="rate"), 5.0), RecordingError, "at least one unit and one sample"),
+        (lambda: hp.classification_accuracy(r.assign_coords(
+            environment=("time", r.environment.values.astype(str)))), RecordingError,
+         "`environment` (of `rec`) must hold integer ids"),
+        (lambda: hp.classify_cells(r.assign_coords(
+            environment=("time", r.environment.values.astype(str))), n_shuffles=2),
+         RecordingError, "`environment` (of `rec`) must hold integer ids"),
+    ]
+    for call, error, words in cases:
+        with pytest.raises(error, match=re.escape(words)):
+            call()
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(NotADirectoryError, match="is a file, not a folder"):
+        save_recording(r, tmp_path / "afile" / "x.zarr")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]

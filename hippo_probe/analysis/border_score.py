@@ -9,7 +9,7 @@ import xarray as xr
 from scipy import optimize
 
 from .._angles import wrap_angle
-from .._validators import check_number, check_option, check_shape
+from .._validators import check_finite, check_number, check_option, check_real, check_shape
 from . import _common
 from ._common import refuse_map_options
 from ._shuffles import MapStack, add_significance, check_percentile
@@ -273,7 +273,8 @@ def _resolve_walls(walls, maps, lead, x, y, size, *, search_width, merge_angle,
             verts = estimate_arena(occ_g[g], x, y, size)
             source = "estimated from occupancy (convex hull of the visited bins)"
         elif walls is not None:
-            verts = check_shape("walls", np.asarray(walls, float), (None, 2))
+            verts = check_finite("walls", check_shape(
+                "walls", check_real("walls", walls).astype(float), (None, 2)))
             if len(verts) < 3:
                 raise ValueError(f"`walls` must be a polygon of at least 3 vertices; got "
                                  f"{len(verts)}")

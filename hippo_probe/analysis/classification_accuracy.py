@@ -77,8 +77,8 @@ def classification_accuracy(rec, probability="class_probability"):
                          f"over `environment_id` at each sample); at index {i} they sum to "
                          f"{total[i]:.6g} (min {np.nanmin(prob[i]):.6g})")
     best = ids[np.argmax(np.where(np.isfinite(prob), prob, -np.inf), axis=1)]
-    true_col = np.searchsorted(ids, env) if np.all(np.diff(ids) > 0) else \
-        np.array([np.flatnonzero(ids == e)[0] for e in env])
+    sorter = np.argsort(ids, kind="stable")          # ids may be integers or text
+    true_col = sorter[np.searchsorted(ids, env, sorter=sorter)]
     p_true = prob[np.arange(len(env)), true_col]
     correct = np.where(valid, (best == env).astype(float), np.nan)
     tt, mean, sem, count = trial_time_average(np.c_[correct, np.where(valid, p_true, np.nan)],

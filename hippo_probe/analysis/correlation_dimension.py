@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validators import check_number, check_seed
+from .._validators import check_number, check_real, check_seed
 from . import _common
 from .config import CORRELATION_DIMENSION as CFG
 
@@ -30,7 +30,7 @@ def _points(data, *, max_points, transient, seed):
         info = dict(source="recording", n_samples=n, n_eligible=int(eligible.size),
                     transient_fraction=transient)
         return points, chosen, trial[chosen], info
-    arr = np.asarray(data, np.float64)
+    arr = check_real("rec_or_array", data).astype(np.float64)
     if arr.ndim != 2:
         raise ValueError(f"`rec_or_array` must be a recording or a (samples, dims) array; "
                          f"got an array of shape {arr.shape}")

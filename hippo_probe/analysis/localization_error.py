@@ -6,7 +6,7 @@ import numpy as np
 import xarray as xr
 
 from .._angles import wrap_angle
-from .._validators import check_shape
+from .._validators import check_real, check_shape
 from . import _common
 
 
@@ -56,6 +56,9 @@ def position_errors(estimate, position, centre=(0.0, 0.0)):
 
 def _xy(rec, name):
     da = rec[name]
+    if set(da.dims) != {"time", "space"}:
+        raise ValueError(f"`rec.{name}` must be a position (dims ('time', 'space')) to be "
+                         f"compared with `rec.position`; got dims {da.dims}")
     if "space" in da.coords:
         da = da.sel(space=["x", "y"])
     return _common.values(da.transpose("time", "space"))
@@ -111,7 +114,7 @@ def localization_error(rec, estimate="estimate", *, centre=(0.0, 0.0)):
     names = [estimate] if isinstance(estimate, str) else list(estimate)
     rec = _common.check_recording(rec, ["position", "trial_time", *names],
                             why="localization error")
-    centre = check_shape("centre", np.asarray(centre, float), (2,))
+    centre = check_shape("centre", check_real("centre", centre).astype(float), (2,))
     pos = _xy(rec, "position")
     results = []
     for name in names:

@@ -9,7 +9,7 @@ import numpy as np
 import xarray as xr
 from scipy import ndimage
 
-from .._validators import check_allocation, check_number, check_shape
+from .._validators import check_allocation, check_number, check_real, check_shape
 from . import _common
 from ._binning import BinSums, bin_sums, compact, grid_bins
 from ._common import AnalysisWarning
@@ -109,7 +109,7 @@ def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None, xy=None) -> Gr
             _warn_outliers_set_extent(x, y, lo, hi)
             pad = RATEMAP.extent_margin * np.maximum(hi - lo, 1e-12)
             extent = (lo[0] - pad[0], hi[0] + pad[0], lo[1] - pad[1], hi[1] + pad[1])
-    extent = tuple(float(e) for e in check_shape("extent", np.asarray(extent, float), (4,)))
+    extent = tuple(float(e) for e in check_shape("extent", check_real("extent", extent).astype(float), (4,)))
     width, height = extent[1] - extent[0], extent[3] - extent[2]
     if not (np.isfinite(extent).all() and width > 0 and height > 0):
         raise ValueError("`extent` must be finite (x_min, x_max, y_min, y_max) with "

@@ -332,7 +332,8 @@ def check_analysable(rec, *, name="rec"):
       ``head_direction`` in radians, [-pi, pi);
     - ``activity``: real numbers (not complex, text or bool), at least one unit, finite
       where in memory;
-    - ``environment``: one value per trial.
+    - ``environment``: integer ids, one value per trial;
+    - ``position``: dims ``('time', 'space')``.
 
     Costs O(samples) on the per-sample coordinates and on ``position`` and
     ``head_direction`` (8-16 bytes a sample). A lazy (dask-backed) ``position`` or
@@ -406,6 +407,9 @@ def check_analysable(rec, *, name="rec"):
         sizes = dict(rec["activity"].sizes)
         if sizes.get("unit", 1) == 0:
             _fail("activity", f"(of `{name}`) must have at least one unit; got 0 units")
+    if "position" in rec.data_vars and set(rec["position"].dims) != {"time", "space"}:
+        _fail("position", f"(of `{name}`) must have dims ('time', 'space') with space = "
+                          f"['x', 'y']; got dims {rec['position'].dims}")
     loaded = {}
     for var in ("position", "head_direction"):
         if var in rec.data_vars:
@@ -415,6 +419,10 @@ def check_analysable(rec, *, name="rec"):
             check_block(var, np.asarray(da.values))
     if "activity" in rec.variables and rec["activity"].chunks is None:
         check_block("activity", np.asarray(rec["activity"].values))
+    if "environment" in rec.coords and rec["environment"].dtype.kind not in "iu":
+        _fail("environment", f"(of `{name}`) must hold integer ids (schema v1); got dtype "
+                             f"{rec['environment'].dtype} (text labels: number them, e.g. "
+                             f"np.unique(labels, return_inverse=True))")
     if trial is not None and "environment" in rec.coords and rec["environment"].dims == ("time",):
         env = np.asarray(rec["environment"].values)
         change = (env[1:] != env[:-1]) & (trial[1:] == trial[:-1])

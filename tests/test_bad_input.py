@@ -607,3 +607,42 @@ def test_wrong_kinds_of_input_get_messages_not_internal_errors(tmp_path):
     with pytest.raises(NotADirectoryError, match="is a file, not a folder"):
         save_recording(r, tmp_path / "afile" / "x.zarr")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+# ------------------------------------------------------------------ denial of service
+def test_a_checkpoint_declaring_a_huge_network_is_refused_before_allocating(tmp_path):
+    import resource
+
+    import torch
+
+    from hippo_probe.training.checkpoint import save_atomic
+
+    net = hp.load_pretrained("localization")
+    obj = torch.load(net.info["file"], weights_only=True)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    for declared, words in ((10**7, "`hidden_size` must be <= 16384"),
+                            (512, "declares hidden_size=512")):
+        crafted = dict(obj, model_config=dict(obj["model_config"], hidden_size=declared))
+        save_atomic(crafted, tmp_path / "crafted.pt")
+        with pytest.raises(CheckpointError, match=re.escape(words)):
+            hp.load_pretrained(tmp_path / "crafted.pt")
+    # nothing near a 10**7-unit network (400 TB) or even a 512-unit one was allocated
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 200_000
+
+
+@pytest.mark.parametrize("dataset", ["acquisition/Position/x/data", "units/spike_times"])
+def test_an_nwb_dataset_declaring_terabytes_is_refused_before_reading(tmp_path, dataset):
+    import h5py
+
+    path = tmp_path / "crafted.nwb"
+    shutil.copy(NWB, path)
+    with h5py.File(path, "r+") as f:
+        attrs = dict(f[dataset].attrs)
+        del f[dataset]
+        # 10**12 float64 declared, nothing written: a file of a few kB
+        d = f.create_dataset(dataset, shape=(10**12,), dtype="f8", chunks=(10**6,),
+                             fillvalue=0.0)
+        d.attrs.update(attrs)
+    assert path.stat().st_size < 2 * NWB.stat().st_size
+    with pytest.raises(RecordingError, match=r"declares shape \(1000000000000,\) .* refused"):
+        from_nwb(path)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .._validators import check_option
+from .._validators import check_number, check_option
 from ..world.config import FEATURES, WorldConfig
 
 #: Matmul precisions of the LSTM's training path (see :class:`PeepholeLSTM`).
@@ -60,8 +60,18 @@ class ModelConfig:
     forget_bias: float = 1.0
     precision: str = "fp32"
 
+    #: Largest architecture built, checked before any parameter is allocated: 16,384
+    #: units (4 GiB of recurrent weights in float32) and 100,000 classes, far above any
+    #: network of the study, far below what a crafted file could declare.
+    MAX_HIDDEN = 16384
+    MAX_CLASSES = 100_000
+
     def __post_init__(self):
         check_option("precision", self.precision, PRECISIONS)
+        check_number("hidden_size", self.hidden_size, low=1, low_inclusive=True,
+                     high=self.MAX_HIDDEN, high_inclusive=True, integer=True)
+        check_number("n_classes", self.n_classes, low=0, low_inclusive=True,
+                     high=self.MAX_CLASSES, high_inclusive=True, integer=True)
 
     @property
     def input_size(self) -> int:

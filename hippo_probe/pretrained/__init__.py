@@ -84,6 +84,26 @@ def resolve_network_file(name_or_path, seed=None) -> Path:
     return candidate
 
 
+def _check_declared_shapes(config, state, path) -> None:
+    """The architecture a file declares must be the one its parameters have, checked
+    before the network is built: a crafted ``hidden_size`` cannot make us allocate more
+    than the file holds."""
+    from ..errors import CheckpointError
+
+    h, f = config.hidden_size, config.input_size
+    expected = {"lstm.weight_h": (4 * h, h), "lstm.weight_x": (4 * h, f),
+                "position.weight": (2, h)}
+    if config.n_classes:
+        expected["classifier.weight"] = (config.n_classes, h)
+    for key, shape in expected.items():
+        got = tuple(state[key].shape) if key in state and hasattr(state[key], "shape") \
+            else None
+        if got != shape:
+            raise CheckpointError(f"`checkpoint` {str(path)!r} declares hidden_size={h}, "
+                                  f"n_classes={config.n_classes} but its `{key}` has shape "
+                                  f"{got} (expected {shape}): refused before building it")
+
+
 def load_pretrained(name: str, seed: int | None = None):
     """Load a shipped network (or a network/checkpoint file) as a Navigator in eval mode.
 
@@ -127,11 +147,15 @@ def load_pretrained(name: str, seed: int | None = None):
     try:
         if isinstance(config, dict):
             config = ModelConfig(**{**config, "input_scale": tuple(config["input_scale"])})
+        state = obj.get("best_model") or obj["model"]
+        _check_declared_shapes(config, state, path)
         net = Navigator(dataclasses.replace(config, precision="fp32"))
+    except CheckpointError:
+        raise
     except (TypeError, KeyError, ValueError) as err:
         raise CheckpointError(f"`checkpoint` {str(path)!r} holds an architecture this "
                               f"version cannot build ({type(err).__name__}: {err})") from None
-    load_into(net, obj.get("best_model") or obj["model"], path)
+    load_into(net, state, path)
     net.task = obj.get("task")
     net.world = checkpoint_world(obj)
     net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test",

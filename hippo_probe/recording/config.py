@@ -45,6 +45,11 @@ class RecordingConfig:
         Absolute tolerance (s) when ``validate`` checks ``trial_time == time -
         trial_start``: 1 µs, far below any sampling interval yet above float64 rounding
         of session times up to about 10^9 s.
+    max_read_bytes : int
+        Largest dataset read whole from a file someone else wrote (an NWB file's series,
+        tables and spike times), checked from its declared shape before reading: 16 GiB,
+        a day of 1,000 units at 30 Hz in float64 is 21 GB... of spike counts 2.6 GB, while
+        a crafted header can declare terabytes in a few bytes of HDF5.
     """
 
     chunk_bytes: int = 8 * 2**20
@@ -54,6 +59,7 @@ class RecordingConfig:
     checksum: bool = True
     gap_jitter: float = 0.1
     time_atol: float = 1e-6
+    max_read_bytes: int = 16 * 2**30
 
     def __post_init__(self):
         check_positive("chunk_bytes", self.chunk_bytes, integer=True)

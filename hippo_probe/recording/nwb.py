@@ -100,16 +100,37 @@ def _check_plausible(name, values, limit, unit, path):
     return values
 
 
+def _read(dataset, what):
+    """``dataset[:]`` once its declared size is known to be bounded
+    (:attr:`RecordingConfig.max_read_bytes`): a header can declare any shape."""
+    _check_size(dataset, what)
+    return dataset[:]
+
+
+def _check_size(dataset, what):
+    shape = getattr(dataset, "shape", None)
+    dtype = getattr(dataset, "dtype", None)
+    if shape is not None:
+        itemsize = getattr(dtype, "itemsize", 8) or 8
+        n_bytes = float(np.prod([float(s) for s in shape])) * itemsize
+        if n_bytes > DEFAULTS.max_read_bytes:
+            raise RecordingError(f"{what} declares shape {tuple(shape)} ({n_bytes / 2**30:.3g}"
+                                 f" GiB), more than the {DEFAULTS.max_read_bytes / 2**30:g} GiB "
+                                 f"read from a file at once: refused (a damaged or crafted "
+                                 f"file?)")
+
+
 def _timestamps(series):
     if series.timestamps is not None:
-        return np.asarray(series.timestamps[:], dtype=float)
+        return np.asarray(_read(series.timestamps, f"`{series.name}.timestamps`"),
+                          dtype=float)
     n = series.data.shape[0]
     return series.starting_time + np.arange(n) / series.rate
 
 
 def _values(series):
     """Series data in its file units times ``conversion`` plus ``offset``."""
-    data = np.asarray(series.data[:], dtype=float)
+    data = np.asarray(_read(series.data, f"`{series.name}.data`"), dtype=float)
     return data * series.conversion + getattr(series, "offset", 0.0)
 
 
@@ -490,7 +511,8 @@ def _read_activity(nwb, activity, keep, time, index, starts, stops, path):
         if series is None:
             raise RecordingError(f"`activity` is 'series' but the file has no "
                                  f"processing/{MODULE}/activity")
-        values = np.asarray(series.data[:])[keep].astype(np.float32)
+        values = np.asarray(_read(series.data, f"`{series.name}.data`"))[keep].astype(
+            np.float32)
         table = module.data_interfaces.get("unit_table")
         coords = {} if table is None else {c: _text(table[c][:]) for c in table.colnames
                                            if c != "unit"}
@@ -501,6 +523,7 @@ def _read_activity(nwb, activity, keep, time, index, starts, stops, path):
     if units is None or len(units) == 0:
         raise RecordingError("the NWB file has no Units table (spike times) and no "
                              f"processing/{MODULE}/activity series")
+    _check_size(units["spike_times"].target.data, "the Units table's `spike_times`")
     spikes = [np.asarray(units["spike_times"][i], dtype=float) for i in range(len(units))]
     # a garbled spike time would fall outside every trial and vanish from the counts
     _check_plausible("spike_times", np.concatenate(spikes), MAX_TIME_S, "s", path)

@@ -20,6 +20,7 @@ import shutil
 import socket
 import time
 import uuid
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -64,7 +65,8 @@ def remove_stale(folder) -> list[Path]:
     """Remove the temporaries in ``folder`` left by writers that died; returns them.
 
     Also removes a previous copy set aside by an overwrite (``.NAME.old-UUID``) once the
-    new copy is in place at ``NAME``.
+    new copy is in place at ``NAME``; if the overwrite died between its two renames
+    (``NAME`` gone, the copy aside), the copy is renamed back to ``NAME``, with a warning.
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -75,11 +77,20 @@ def remove_stale(folder) -> list[Path]:
         if _is_stale(item, now):
             _remove(item)
             removed.append(item)
-    for item in folder.glob(f".*{OLD}*"):
+    aside = sorted(folder.glob(f".*{OLD}*"), key=lambda p: p.stat().st_mtime,
+                   reverse=True)
+    for item in aside:
         name = item.name[1:].rpartition(OLD)[0]
-        if name and (folder / name).exists():
+        if not name:
+            continue
+        if (folder / name).exists() or (folder / name).is_symlink():
             _remove(item)
             removed.append(item)
+        else:
+            os.rename(item, folder / name)          # the newest copy aside comes back
+            warnings.warn(f"{folder / name} was being replaced when its writer stopped; "
+                          f"its previous version (set aside as {item.name}) is restored",
+                          UserWarning, stacklevel=3)
     return removed
 
 

@@ -99,6 +99,8 @@ WRITING_METHODS = {"to_zarr", "to_netcdf", "savefig", "write_text", "write_bytes
 #: (file, function): why a write there is not a second mechanism.
 ALLOWED = {
     ("_atomic.py", "_publish"): "the mechanism itself",
+    ("_atomic.py", "remove_stale"): "the mechanism's recovery: renames back the copy an "
+                                    "overwrite set aside before it died",
     ("recording/store.py", "_write"): "called inside save_recording's atomic_path (or on "
                                       "a URL, where object stores have no rename)",
     ("tasks.py", "_discard"): "renames a damaged cache block aside to delete it",

@@ -646,3 +646,20 @@ def test_an_nwb_dataset_declaring_terabytes_is_refused_before_reading(tmp_path, 
     assert path.stat().st_size < 2 * NWB.stat().st_size
     with pytest.raises(RecordingError, match=r"declares shape \(1000000000000,\) .* refused"):
         from_nwb(path)
+
+
+# ------------------------------------------------------------------ leftovers
+def test_a_store_left_aside_by_an_interrupted_overwrite_is_restored(tmp_path):
+    r = _session()
+    save_recording(r, tmp_path / "r.zarr")
+    # an overwrite killed between its renames: the old store aside, nothing at the name
+    os.rename(tmp_path / "r.zarr", tmp_path / ".r.zarr.old-0badc0de")
+    with pytest.warns(UserWarning, match="its previous version .* is restored"):
+        back = open_recording(tmp_path / "r.zarr")
+    np.testing.assert_array_equal(back.activity.values, r.activity.values.astype(np.float32))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.zarr"]
+    # and once the new store is in place, a copy aside is cleaned by the next save
+    os.rename(tmp_path / "r.zarr", tmp_path / ".r.zarr.old-0badc0de")
+    with pytest.warns(UserWarning, match="is restored"):
+        save_recording(r, tmp_path / "r.zarr", overwrite=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.zarr"]

@@ -92,14 +92,16 @@ def test_killed_writer_leaves_previous_store_or_nothing(tmp_path):
     with pytest.raises(RecordingError, match="half-written"):
         open_recording(tmp_path / "copy" / "half.zarr")
     shutil.rmtree(tmp_path / "copy")
-    # the overwritten store is the previous complete version, untouched, and opening it
-    # cleaned what the dead writer left beside it
-    xr.testing.assert_identical(open_recording(replaced).load(), previous)
-    assert not list(tmp_path.glob(".replaced.zarr.partial-*"))
-    # killed after setting the old store aside: destination absent, the error says where
+    # killed after setting the old store aside: destination absent until the next open
     assert not swapped.exists()
-    with pytest.raises(FileNotFoundError, match="interrupted overwrite left the previous"):
-        open_recording(swapped)
+    # the overwritten store is the previous complete version, untouched, and opening it
+    # cleaned what the dead writers left beside it: the partial store is gone, and the
+    # store set aside is back at its name, with a warning
+    with pytest.warns(UserWarning, match="swapped.zarr was being replaced .* restored"):
+        xr.testing.assert_identical(open_recording(replaced).load(), previous)
+    assert not list(tmp_path.glob(".replaced.zarr.partial-*"))
+    assert not list(tmp_path.glob(".swapped.zarr.old-*"))
+    xr.testing.assert_identical(open_recording(swapped).load(), previous)
     # the next saves clean up what the dead writers left
     for dest in (replaced, swapped):
         save_recording(previous, dest, overwrite=True)

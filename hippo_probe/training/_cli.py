@@ -78,6 +78,9 @@ def add_commands(sub):
                    help="run directory: checkpoint.pt, network.pt, log.json (resumes the "
                         "run if it exists)")
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    p.add_argument("--overwrite", action="store_true",
+                   help="start afresh in a FOLDER holding a finished run's network.pt or "
+                        "log.json without a checkpoint (default: refuse)")
     p.set_defaults(run=_train)
 
     e = sub.add_parser("evaluate", help="errors / accuracy of a network on a split")
@@ -122,7 +125,8 @@ def _train(a):
                          stop_improvement=a.stop_improvement or None,
                          max_hours=a.max_hours or None,
                          snapshot_every=a.snapshot_every)
-    log = fit(config, a.out, progress=not a.no_progress, cache_dir=a.cache_dir)
+    log = fit(config, a.out, progress=not a.no_progress, cache_dir=a.cache_dir,
+              overwrite=a.overwrite)
     if "test" in log:
         print(json.dumps(log["test"], indent=1))
 

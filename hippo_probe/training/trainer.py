@@ -26,6 +26,7 @@ import torch.nn.functional as F
 from tqdm.auto import tqdm
 
 from .._atomic import write_text
+from .._validators import check_bool
 from .._version import __version__
 from ..errors import RunInUseError
 from ..model.config import ModelConfig, input_scale_for, native_bf16, resolve_precision
@@ -256,7 +257,7 @@ def _distributed(device: str = "cpu"):
 
 
 def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
-        stop_after: int | None = None) -> dict:
+        stop_after: int | None = None, overwrite: bool = False) -> dict:
     """Train (or resume training) a network; returns the training log.
 
     The process's torch and numba threads are pinned to ``config.threads`` for the run, and
@@ -277,7 +278,12 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
     stop_after : int, optional
         Stop (with a checkpoint) after this many optimizer steps of *this* call — to
         simulate an interruption in tests.
+    overwrite : bool
+        Start afresh in a folder that holds a finished run's ``network.pt`` or
+        ``log.json`` but no checkpoint to resume from (default: refuse, so a pruned
+        run's network is not replaced by a new run by mistake).
     """
+    overwrite = check_bool("overwrite", overwrite)
     precision = resolve_precision(config.precision)
     if precision == "bf16" and config.device == "cpu" and not native_bf16():
         warnings.warn("`precision` 'bf16' on a CPU without AVX512-BF16 or AMX: oneDNN "
@@ -296,6 +302,13 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
     run_dir = Path(run_dir)
     try:
         with _sole_trainer(run_dir) if rank == 0 else contextlib.nullcontext():
+            if rank == 0 and not overwrite and not (run_dir / "checkpoint.pt").exists():
+                found = [n for n in ("network.pt", "log.json") if (run_dir / n).exists()]
+                if found:
+                    raise FileExistsError(
+                        f"`run_dir` {str(run_dir)!r} holds {found} of a run but no "
+                        f"checkpoint.pt to resume from; starting afresh would replace "
+                        f"them: pass overwrite=True (--overwrite) or use a new folder")
             return _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after)
     finally:
         torch.set_num_threads(threads_before)   # don't leave a Jupyter kernel pinned

@@ -448,3 +448,20 @@ def test_a_resumed_warm_restart_equals_an_uninterrupted_one(uninterrupted, tmp_p
     first = _params(tmp_path / "whole" / "snapshots" / snaps[0])
     assert not torch.equal(first["lstm.weight_h"], _params(base)["lstm.weight_h"])
     assert hp.load_pretrained(tmp_path / "whole" / "snapshots" / snaps[0]).task == "specialized"
+
+
+def test_a_finished_run_without_its_checkpoint_is_not_overwritten(uninterrupted, tmp_path):
+    import shutil as sh
+
+    d, _ = uninterrupted
+    run = tmp_path / "run"
+    sh.copytree(d / "run", run)
+    (run / "checkpoint.pt").unlink()          # pruned, as the queue does once shipped
+    before = (run / "network.pt").read_bytes()
+    with pytest.raises(FileExistsError, match=r"holds \['network.pt', 'log.json'\] .* no "
+                                              r"checkpoint.pt"):
+        fit(TrainConfig(**TINY), run, cache_dir=d / "cache", progress=False)
+    assert (run / "network.pt").read_bytes() == before
+    fit(TrainConfig(**{**TINY, "steps": 3}), run, cache_dir=d / "cache", progress=False,
+        overwrite=True)
+    assert (run / "network.pt").read_bytes() != before

@@ -663,3 +663,53 @@ def test_a_store_left_aside_by_an_interrupted_overwrite_is_restored(tmp_path):
     with pytest.warns(UserWarning, match="is restored"):
         save_recording(r, tmp_path / "r.zarr", overwrite=True)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.zarr"]
+
+
+# ------------------------------------------------------------------ NWB files from elsewhere
+def _edited_nwb(tmp_path, edit):
+    import h5py
+
+    path = tmp_path / "edited.nwb"
+    shutil.copy(NWB, path)
+    with h5py.File(path, "r+") as f:
+        edit(f, h5py)
+    return path
+
+
+def _replace(f, name, values):
+    attrs = dict(f[name].attrs)
+    del f[name]
+    f.create_dataset(name, data=values)
+    f[name].attrs.update(attrs)
+
+
+@pytest.mark.parametrize("edit, words", [
+    (lambda f, h: [_replace(f, f"acquisition/Position/{a}/data",
+                            np.full(f[f"acquisition/Position/{a}/data"].shape, np.nan))
+                   for a in "xyz"], "is all NaN"),
+    (lambda f, h: f["acquisition/Position/x/data"].attrs.modify("conversion", 0.0),
+     "`x.conversion` must be a finite non-zero factor"),
+    (lambda f, h: [f[f"acquisition/Position/{a}/data"].attrs.modify("unit", "furlongs")
+                   for a in "xyz"], "position unit 'furlongs'"),
+    (lambda f, h: _replace(f, "units/spike_times_index",
+                           f["units/spike_times_index"][:][::-1].copy()),
+     "`spike_times_index` .* is not non-decreasing"),
+    (lambda f, h: f.__setitem__("acquisition/elsewhere",
+                                h.ExternalLink("/etc/other.h5", "/data")),
+     "links to data in other files"),
+])
+def test_a_damaged_nwb_file_is_refused(tmp_path, edit, words):
+    path = _edited_nwb(tmp_path, edit)
+    with pytest.raises(RecordingError, match=words):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            from_nwb(path)
+
+
+def test_negative_spike_times_are_warned_about(tmp_path):
+    def edit(f, h):
+        st = f["units/spike_times"][:]
+        st[:5] = -1.0
+        _replace(f, "units/spike_times", st)
+    with pytest.warns(UserWarning, match="5 spike times .* are negative"):
+        from_nwb(_edited_nwb(tmp_path, edit))

@@ -120,6 +120,28 @@ def _check_size(dataset, what):
                                  f"file?)")
 
 
+def _refuse_external_links(path):
+    """An NWB (HDF5) file may link to datasets in other files: reading it would read
+    them, wherever they are. Only the file given is read."""
+    import h5py
+
+    found = []
+
+    def visit(name, link):
+        if isinstance(link, h5py.ExternalLink):
+            found.append(f"{name} -> {link.filename}:{link.path}")
+
+    try:
+        with h5py.File(path, "r") as f:
+            f.visititems_links(visit)
+    except OSError as err:
+        raise RecordingError(f"`path` is not a readable NWB file: {path} ({err})") from err
+    if found:
+        raise RecordingError(f"`path` {path} links to data in other files ({found[0]}"
+                             f"{' and more' if len(found) > 1 else ''}): refused; only the "
+                             f"file given is read")
+
+
 def _timestamps(series):
     if series.timestamps is not None:
         return np.asarray(_read(series.timestamps, f"`{series.name}.timestamps`"),
@@ -131,7 +153,12 @@ def _timestamps(series):
 def _values(series):
     """Series data in its file units times ``conversion`` plus ``offset``."""
     data = np.asarray(_read(series.data, f"`{series.name}.data`"), dtype=float)
-    return data * series.conversion + getattr(series, "offset", 0.0)
+    conversion = series.conversion
+    if not (np.isfinite(conversion) and conversion != 0):
+        raise RecordingError(f"`{series.name}.conversion` must be a finite non-zero factor "
+                             f"to the series' unit; got {conversion!r} (every value would "
+                             f"become {0 if conversion == 0 else conversion})")
+    return data * conversion + getattr(series, "offset", 0.0)
 
 
 def _axes_table(series_by_name):
@@ -180,12 +207,23 @@ def _read_position(nwb, name, floor_axes, position_units, path):
         if axes[axis][0] is not first and not np.array_equal(_timestamps(axes[axis][0]), time):
             raise RecordingError(f"position axes {floor_axes} have different timestamps in "
                                  f"{location}")
-    unit = position_units or NWB_LENGTH_UNITS.get(str(first.unit).strip().lower())
+    declared = str(first.unit).strip().lower()
+    unit = position_units or NWB_LENGTH_UNITS.get(declared)
     if unit is None:
-        unit = "m"   # an empty or unknown unit field; values are then taken as metres
+        if declared not in ("", "unknown", "none", "n/a", "a.u."):
+            raise RecordingError(f"position unit {first.unit!r} in {path} is not a length "
+                                 f"this reader knows ({sorted(NWB_LENGTH_UNITS)}); pass "
+                                 f"`position_units` ('m', 'cm' or 'mm') if you know it")
+        warnings.warn(f"the position in {path} has no unit ({first.unit!r}): taken as "
+                      f"metres; pass `position_units` if it is not", UserWarning,
+                      stacklevel=4)
+        unit = "m"
     xy = np.column_stack([columns[a] for a in floor_axes]) * LENGTH_UNITS[
         check_option("position_units", unit, LENGTH_UNITS)]
     _check_plausible("position", xy, MAX_POSITION_M, "m", path)
+    if not np.isfinite(xy).any():
+        raise RecordingError(f"`position` in {path} ({location}) is all NaN: no tracked "
+                             f"sample to analyse")
     _check_plausible("position timestamps", time, MAX_TIME_S, "s", path)
     return time, xy, {"nwb_position": location, "nwb_floor_axes": list(floor_axes),
                       "nwb_position_units": unit}
@@ -408,6 +446,7 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
         raise FileNotFoundError(f"`path` does not exist: {path}")
     check_option("trials", trials, ("auto", True, False))
     check_option("activity", activity, ("auto", "units", "series"))
+    _refuse_external_links(path)
     try:
         io = pynwb.NWBHDF5IO(str(path), "r")
         with warnings.catch_warnings():
@@ -524,7 +563,19 @@ def _read_activity(nwb, activity, keep, time, index, starts, stops, path):
         raise RecordingError("the NWB file has no Units table (spike times) and no "
                              f"processing/{MODULE}/activity series")
     _check_size(units["spike_times"].target.data, "the Units table's `spike_times`")
+    # each unit's spikes are the slice between consecutive index entries: an index that
+    # goes back would hand spikes of one unit to another
+    ends = np.asarray(_read(units["spike_times"].data, "the Units table's spike index"))
+    if (np.diff(ends.astype(np.int64)) < 0).any() or (ends.size and ends[0] < 0) or (
+            ends.size and ends[-1] > len(units["spike_times"].target.data)):
+        raise RecordingError(f"the Units table's `spike_times_index` in {path} is not "
+                             f"non-decreasing within the spike times: the file is damaged")
     spikes = [np.asarray(units["spike_times"][i], dtype=float) for i in range(len(units))]
+    negative = sum(int((s < 0).sum()) for s in spikes)
+    if negative:
+        warnings.warn(f"{negative} spike times in {path} are negative (before the session's "
+                      f"start): they fall outside every sample and are dropped",
+                      UserWarning, stacklevel=3)
     # a garbled spike time would fall outside every trial and vanish from the counts
     _check_plausible("spike_times", np.concatenate(spikes), MAX_TIME_S, "s", path)
     values = bin_spikes(spikes, time, index, starts, stops)

@@ -90,7 +90,13 @@ def count(low: int = 1):
     return parse
 
 
-def check_output(flag: str, path, *, kind: str = "store", overwrite: bool = False) -> Path:
+#: What a ``kind="file"`` output may replace without --overwrite: a file of the kind the
+#: command writes (a figure, a JSON of numbers), never e.g. a tracked text file.
+OUTPUT_SUFFIXES = {"figure": (".png", ".pdf", ".svg"), "json": (".json",)}
+
+
+def check_output(flag: str, path, *, kind: str = "store", overwrite: bool = False,
+                 writes: str = "figure") -> Path:
     """Refuse, before any work starts, an output path the command could not write at its
     end; the message names the command-line ``flag``.
 
@@ -101,10 +107,14 @@ def check_output(flag: str, path, *, kind: str = "store", overwrite: bool = Fals
     path : str or os.PathLike
     kind : {"store", "file", "folder"}
         ``"store"``: a zarr store, refused if it exists unless ``overwrite`` (pass
-        --overwrite); ``"file"``: a file replaced freely (a figure), refused if it is an
-        existing folder; ``"folder"``: a folder written into, refused if it is a file.
+        --overwrite); ``"file"``: a file of the kind ``writes`` replaced freely (an older
+        figure or JSON of the command), any other existing file refused unless
+        ``overwrite``, and refused if it is an existing folder; ``"folder"``: a folder
+        written into, refused if it is a file.
     overwrite : bool
-        The command's --overwrite (stores only).
+        The command's --overwrite.
+    writes : {"figure", "json"}
+        What a ``"file"`` output is (:data:`OUTPUT_SUFFIXES`).
 
     Returns
     -------
@@ -120,6 +130,11 @@ def check_output(flag: str, path, *, kind: str = "store", overwrite: bool = Fals
     if kind == "file" and path.is_dir():
         raise IsADirectoryError(f"{flag} {path} is a folder; give a file name (e.g. "
                                 f"{path / 'errors.png'})")
+    if kind == "file" and path.is_file() and not overwrite \
+            and path.suffix.lower() not in OUTPUT_SUFFIXES[writes]:
+        raise FileExistsError(f"{flag} {path} exists and is not a {writes} file "
+                              f"({', '.join(OUTPUT_SUFFIXES[writes])}) this command "
+                              f"writes; pass --overwrite to replace it")
     if kind == "folder" and path.exists() and not path.is_dir():
         raise NotADirectoryError(f"{flag} {path} is a file; give a folder")
     # the nearest existing folder above it is where the output (or its folders) is made

@@ -713,3 +713,21 @@ def test_negative_spike_times_are_warned_about(tmp_path):
         _replace(f, "units/spike_times", st)
     with pytest.warns(UserWarning, match="5 spike times .* are negative"):
         from_nwb(_edited_nwb(tmp_path, edit))
+
+
+@pytest.mark.parametrize("what", ["a chunk", "a variable"])
+def test_a_store_linking_outside_itself_is_refused(tmp_path, what):
+    a, b = tmp_path / "a.zarr", tmp_path / "b.zarr"
+    save_recording(_session(), a)
+    save_recording(_session().assign(activity=_session().activity * 2), b)
+    if what == "a variable":
+        shutil.rmtree(a / "activity")
+        os.symlink(b / "activity", a / "activity")
+    else:
+        chunk = next(p for p in (a / "activity").rglob("*") if p.is_file()
+                     and p.name != "zarr.json")
+        twin = b / chunk.relative_to(a)
+        chunk.unlink()
+        os.symlink(twin, chunk)
+    with pytest.raises(RecordingError, match="links to .* outside it; refused"):
+        open_recording(a)

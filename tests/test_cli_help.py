@@ -120,6 +120,13 @@ def test_baselines_refuses_an_existing_out_before_making_any_trial(tmp_path, cap
     (["import-nwb", "session.nwb", "FOLDER"], "DEST {folder} already exists; pass --overwrite"),
     (["figures", "--out", "FILE"], "--out {file} is a file; give a folder"),
     (["main", "--out", "FILE"], "--out {file} is a file; give a folder"),
+    (["world-stats", "--json", "FILE"],
+     "--json {file} exists and is not a json file (.json) this command writes; pass "
+     "--overwrite"),
+    (["world-stats", "--plot", "FILE"],
+     "--plot {file} exists and is not a figure file (.png, .pdf, .svg)"),
+    (["baselines", "--task", "localization", "--out", "NEW", "--plot", "FILE"],
+     "--plot {file} exists and is not a figure file"),
 ])
 def test_outputs_are_refused_before_the_work_naming_the_flag(argv, words, tmp_path, capsys,
                                                              monkeypatch):

@@ -207,9 +207,26 @@ def _save_url(rec, url, overwrite, config, storage_options):
     _write(rec, url, config, storage_options)
 
 
+def _refuse_links_out(root: Path) -> None:
+    """A store is one folder: a chunk, array or group that is a symlink leading outside it
+    would read another store's data as this one's."""
+    root = root.resolve()
+    for folder, dirs, files in os.walk(root):
+        for name in dirs + files:
+            item = Path(folder) / name
+            if item.is_symlink():
+                target = item.resolve()
+                if target != root and root not in target.parents:
+                    raise RecordingError(f"`path` {str(root)!r} is not a self-contained "
+                                         f"store: {str(item.relative_to(root))!r} links to "
+                                         f"{str(target)!r}, outside it; refused")
+
+
 def _check_complete(path, storage_options):
     """Open the root group and check the completion marker and the chunk counts."""
     label = os.fspath(path)
+    if not _is_url(label):
+        _refuse_links_out(Path(label))
     try:
         group = zarr.open_group(path, mode="r", storage_options=storage_options)
     except Exception as err:   # zarr raises many kinds for a missing or garbled zarr.json

@@ -1,6 +1,6 @@
 """``hippo-probe world-stats``."""
 
-from ..cli import count, one_of
+from ..cli import check_output, count, one_of
 from ..tasks import SPLITS
 from .config import WORLDS
 
@@ -20,6 +20,8 @@ def add_commands(sub):
                         "(default: no picture)")
     p.add_argument("--json", default=None, metavar="FILE",
                    help="also write the numbers here, as JSON (default: only printed)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing --json or --plot file of another kind")
     p.set_defaults(run=_world_stats)
 
 
@@ -28,6 +30,13 @@ def _world_stats(args):
 
     from .._atomic import save_figure, write_text
     from .stats import format_stats, plot_example_trials, world_stats
+
+    # refused before the trials are simulated
+    if args.json:
+        check_output("--json", args.json, kind="file", writes="json",
+                     overwrite=args.overwrite)
+    if args.plot:
+        check_output("--plot", args.plot, kind="file", overwrite=args.overwrite)
 
     stats = world_stats(n_trials=args.trials, split=args.split, seed=args.seed,
                         world=args.world)

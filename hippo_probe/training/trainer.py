@@ -284,11 +284,28 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
         run's network is not replaced by a new run by mistake).
     """
     overwrite = check_bool("overwrite", overwrite)
+    run_dir = Path(run_dir)
+    # the lock first, before anything slow (process group, threads, trial cache): a second
+    # trainer started on the same folder while the first is starting is refused at once
+    lead = int(os.environ.get("RANK", "0")) == 0
+    with _sole_trainer(run_dir) if lead else contextlib.nullcontext():
+        if lead and not overwrite and not (run_dir / "checkpoint.pt").exists():
+            found = [n for n in ("network.pt", "log.json") if (run_dir / n).exists()]
+            if found:
+                raise FileExistsError(
+                    f"`run_dir` {str(run_dir)!r} holds {found} of a run but no "
+                    f"checkpoint.pt to resume from; starting afresh would replace "
+                    f"them: pass overwrite=True (--overwrite) or use a new folder")
+        return _fit_pinned(config, run_dir, progress, cache_dir, stop_after)
+
+
+def _fit_pinned(config, run_dir, progress, cache_dir, stop_after):
+    """``_fit`` with the precision resolved and the process's threads pinned."""
     precision = resolve_precision(config.precision)
     if precision == "bf16" and config.device == "cpu" and not native_bf16():
         warnings.warn("`precision` 'bf16' on a CPU without AVX512-BF16 or AMX: oneDNN "
                       "emulates it, ~20x slower than fp32 here; use precision='auto'",
-                      RuntimeWarning, stacklevel=2)
+                      RuntimeWarning, stacklevel=3)
     config = dataclasses.replace(config, precision=precision)
     rank, world_size = _distributed(config.device)
     threads_before = torch.get_num_threads()
@@ -299,17 +316,8 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
     except Exception:  # numba threading layer not initialisable: serial is fine
         pass
     reuse_freed_memory()    # each step's activations, reused instead of page-faulted anew
-    run_dir = Path(run_dir)
     try:
-        with _sole_trainer(run_dir) if rank == 0 else contextlib.nullcontext():
-            if rank == 0 and not overwrite and not (run_dir / "checkpoint.pt").exists():
-                found = [n for n in ("network.pt", "log.json") if (run_dir / n).exists()]
-                if found:
-                    raise FileExistsError(
-                        f"`run_dir` {str(run_dir)!r} holds {found} of a run but no "
-                        f"checkpoint.pt to resume from; starting afresh would replace "
-                        f"them: pass overwrite=True (--overwrite) or use a new folder")
-            return _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after)
+        return _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after)
     finally:
         torch.set_num_threads(threads_before)   # don't leave a Jupyter kernel pinned
 

@@ -10,6 +10,11 @@ average of them, its time constant chosen on validation trials at ``--tau-size``
         [--sizes 4000 16000 64000] [--features cache/readout]
         [--out analyses/data/arena_readout] [--export hippo_probe/pretrained]
 
+The arena probe of a training run along its steps (its snapshots, 2,000 training trials):
+
+    python analyses/arena_readout.py --networks runs/RUN/snapshots/step_*.pt
+        --sizes 2000 --tau-size 2000 --out analyses/data/arena_probe_steps
+
 Writes ``<out>/<network>_seed<k>.json`` (learning curves, L2 paths, test curves) and,
 with ``--export``, the study's readout at the largest size as
 ``<export>/generalized_readout[_seed<k>].pt`` (the compass world's as
@@ -39,9 +44,10 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--world", default="darkness", choices=("darkness", "compass"))
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
-    ap.add_argument("--network", default=None,
-                    help="network file or shipped name to read instead of the shipped "
-                         "generalized network (one seed; e.g. a training snapshot)")
+    ap.add_argument("--networks", nargs="+", default=None, metavar="FILE",
+                    help="network files to read instead of the shipped generalized "
+                         "networks (e.g. a run's snapshots/step_*.pt; named by the run "
+                         "folder and the file's name)")
     ap.add_argument("--sizes", type=int, nargs="+", default=list(R.READOUT.sizes))
     ap.add_argument("--tau-size", type=int, default=16000,
                     help="training trials at which the variant's time constant is chosen")
@@ -55,8 +61,9 @@ def main():
     torch.set_num_threads(1)
     cfg = replace(R.READOUT, sizes=tuple(a.sizes))
     base = network_name("generalized", a.world)
-    if a.network:
-        nets = {Path(a.network).stem: hp.load_pretrained(a.network)}
+    if a.networks:
+        nets = {f"{Path(f).resolve().parents[1].name}_{Path(f).stem}": hp.load_pretrained(f)
+                for f in a.networks}
     else:
         nets = {shipped_name(base, s): hp.load_pretrained(base, seed=s) for s in a.seeds}
     for net in nets.values():

@@ -66,7 +66,7 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     For each unit (one environment; the most visited when the recording has several):
 
     ========================  =================================================  ========
-    class                     rule (defaults of :class:`~.config.CellClassConfig`) source
+    class                     rule (defaults: ``CellClassConfig``)               source
     ========================  =================================================  ========
     ``grid``                  grid score > 95th pct of shuffles (*)              [1]
     ``border``                border score > 99th pct of shuffles and > 0.5 (*)  [2, 3]

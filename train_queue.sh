@@ -48,7 +48,7 @@ readout() {                     # SEED: softmax readout on the frozen generalize
     --validation-trials 300
 }
 
-# specialized_s2 sits in lane A so that the lanes end near each other: at session 15's
+# specialized_s2 sits in lane A so that the lanes end near each other: at one point
 # start lane A held only localization_s2 (~6,000 steps left: the 1% rule ended seeds 0
 # and 1 at 11,750), lane B ~94,000 steps
 lane_a() { network generalized 0 && readout 0; network localization 0; network generalized 1 \

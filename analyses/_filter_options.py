@@ -12,8 +12,8 @@ def add_filter_options(parser, particles=True):
                             help="particles of the filter (default: the filter's default)")
         parser.add_argument("--chunk", type=int, default=100, help="trials per filter run")
     parser.add_argument("--outlier-everywhere", action="store_true",
-                        help="the contact's outlier floor for every particle, as before "
-                             "session 13 (default: only within reach of a wall; "
+                        help="the contact's outlier floor for every particle, the earlier "
+                             "contact model (default: only within reach of a wall; "
                              "ContactModelConfig.outlier_near_walls)")
     parser.add_argument("--contact-proposals", type=int, default=1,
                         help="moves per particle at a contact step "

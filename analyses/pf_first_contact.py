@@ -4,8 +4,8 @@ In the localization task the start is unknown, so before the first boundary cont
 posterior covers much of the 1 m arena. The first contact then leaves strips along the
 walls that match the sensed angle and distance, plus whatever the contact likelihood's
 outlier floor keeps (a contact the one-reflection model does not explain). With the floor
-given to every particle (``ContactModelConfig.outlier_near_walls=False``, the default
-before session 13), particles deep in the arena's interior keep it, where a contact is
+given to every particle (``ContactModelConfig.outlier_near_walls=False``, the earlier
+contact model), particles deep in the arena's interior keep it, where a contact is
 impossible; with ``outlier_near_walls=True`` (the default now) only particles whose step
 could have reached a wall do.
 

@@ -8,7 +8,7 @@ the growth of the highest resident set size while generating ``--batch`` trials 
 process (it counts numba's allocations, which tracemalloc does not see) and tracemalloc's
 peak of the Python and numpy allocations.
 
-Peer: the plain-numpy prototype of issue 2 reached about 140,000 steps/s; the target is
+Peer: a plain-numpy prototype of the simulator reached about 140,000 steps/s; the target is
 500,000 steps/s (300,000 trials x 500 steps in 5 minutes).
 
     python benchmarks/bench_trials.py [--trials 2000] [--batch 1000] [--repeat 3]

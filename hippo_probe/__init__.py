@@ -35,7 +35,7 @@ _LAZY_ATTRS = {
     "to_nwb": "hippo_probe.recording",
     "select_trials": "hippo_probe.recording",
     "poisson_spikes": "hippo_probe.recording",
-    # pynapple bridge (issue 16; pynapple is imported when called)
+    # pynapple bridge (pynapple is imported when called)
     "to_pynapple": "hippo_probe.recording",
     "from_pynapple": "hippo_probe.recording",
     # analyses (no torch)
@@ -53,7 +53,7 @@ _LAZY_ATTRS = {
     "localization_error": "hippo_probe.analysis",
     "classification_accuracy": "hippo_probe.analysis",
     "AnalysisWarning": "hippo_probe.analysis",
-    # cell classes (issue 17)
+    # cell classes
     "place_fields": "hippo_probe.analysis",
     "spatial_autocorrelation": "hippo_probe.analysis",
     "grid_score": "hippo_probe.analysis",

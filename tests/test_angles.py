@@ -21,7 +21,7 @@ HAND_WRAPS = [
 
 
 def test_angles_are_wrapped_only_by_wrap_angle():
-    """Issue 15 counted five implementations; a new hand-written wrap fails here."""
+    """One implementation of angle wrapping: a new hand-written wrap fails here."""
     found = []
     for path in sorted(PACKAGE.rglob("*.py")):
         if path.name == "_angles.py":

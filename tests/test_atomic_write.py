@@ -152,7 +152,7 @@ def _direct_writes(tree):
 
 
 def test_every_file_the_package_writes_goes_through_atomic_path():
-    """One implementation of write-then-rename (issue 15 found seven): a write or rename
+    """One implementation of write-then-rename: a write or rename
     outside ``with atomic_path(...)`` is a second mechanism, unless listed in ALLOWED."""
     stray = []
     scripts = PACKAGE.parent / "analyses"        # the repository's analysis scripts too
@@ -166,7 +166,7 @@ def test_every_file_the_package_writes_goes_through_atomic_path():
 
 
 def test_the_scan_sees_a_second_mechanism():
-    """The scan itself: the writer of log.json before issue 15 is found."""
+    """The scan itself: a direct writer of log.json is found."""
     old = ast.parse(textwrap.dedent("""
         def save_log(run_dir, log):
             with open(run_dir / "log.json", "w") as f:

@@ -1,5 +1,5 @@
 """Bad input gets a clear error (argument, value, what was expected), never a silently
-wrong result or a third party's traceback. One test per probe of issue 15 not covered by
+wrong result or a third party's traceback. One test per kind of bad input not covered by
 the storage, checkpoint and CLI tests."""
 
 import glob

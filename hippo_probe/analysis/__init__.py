@@ -22,7 +22,7 @@ from .remapping_similarity import remapping_similarity
 from .spatial_information import spatial_information
 from .spatial_selectivity import spatial_selectivity
 
-# cell classes (issue 17): place fields, grid, border, speed, conjunctive, classification
+# cell classes: place fields, grid, border, speed, conjunctive, classification
 from .border_score import border_score
 from .classify_cells import classify_cells
 from .conjunctive_tuning import conjunctive_tuning

@@ -43,7 +43,7 @@ class ContactModelConfig:
         could have reached a wall (the distances of its start and end to their nearest
         walls sum to at most ``2 touch_range + max_speed * network_dt``, exact since a
         distance to a wall changes no faster than the path's length); farther from every
-        wall a contact is impossible, not merely unexplained. False (before session 13):
+        wall a contact is impossible, not merely unexplained. False (the earlier model):
         every particle gets the floor, and a first contact under a broad posterior
         (localization task, start unknown) leaves much of the mass in the arena's
         interior, so the filter is under-confident there (at 10,000 particles,
@@ -95,8 +95,7 @@ class ParticleFilterConfig:
         whole 1 m arena and the posterior stays multimodal until contacts and the drift
         settle it). Chosen when the contact's outlier floor went to every particle: on
         the same 100 test trials of the darkness world, 1,000 particles erred 11% above
-        10,000 at 100 s, 2,000 within 4%. With the floor near walls only (the default
-        since session 13) 1,000 / 2,000 / 10,000 particles err 0.109 / 0.102 / 0.109 m,
+        10,000 at 100 s, 2,000 within 4%. With the floor near walls only (the default) 1,000 / 2,000 / 10,000 particles err 0.109 / 0.102 / 0.109 m,
         0.126 / 0.123 / 0.123 m and 0.126 / 0.130 / 0.125 m at 50 / 100 / 200 s; 2,000
         is kept because the posterior's Monte Carlo over-confidence shrinks with the
         particles (analyses/README.md).

@@ -70,10 +70,10 @@ task's default 2,000 particles, plain resampling leaves the position posterior t
 narrow (its 90% region holds 0.870-0.874): Monte Carlo error, which shrinks with the
 particles (0.889 at 5,000) and sits 2-20 s after contacts, though not made at the
 contact step itself (splitting the particles there,
-``ParticleFilterConfig.contact_proposals``, does not remove it). Since session 14 the
+``ParticleFilterConfig.contact_proposals``, does not remove it). The
 localization filter's kernel after resampling (step 4) removes that over-confidence at
 2,000 particles (0.898 in the 90% region) and brings its error to the 20,000-particle
-filter's. Until session 13 the contact's outlier floor went to every particle, deep in
+filter's. In an earlier contact model the outlier floor went to every particle, deep in
 the arena too, which made the converged filter under-confident at a localization
 trial's first contact (``ContactModelConfig.outlier_near_walls``).
 

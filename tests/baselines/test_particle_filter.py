@@ -87,7 +87,7 @@ def test_filter_ranks_in_chunks_equal_one_run():
 
 def test_outlier_floor_near_walls_only_where_a_contact_could_happen():
     """At a first contact under a broad posterior (start unknown), the outlier floor given
-    to every particle (``outlier_near_walls=False``, the default before session 13)
+    to every particle (``outlier_near_walls=False``, the earlier contact model)
     keeps particles far inside the arena; near walls only (the default), it goes only to
     particles whose step could have reached a wall (start and end distances to their
     nearest walls summing to at most ``2 touch_range + max_speed * network_dt``, so no

@@ -10,6 +10,10 @@ from ..world.config import FEATURES, WorldConfig
 #: Matmul precisions of the LSTM's training path (see :class:`PeepholeLSTM`).
 PRECISIONS = ("fp32", "bf16")
 
+#: The named model variants (:mod:`hippo_probe.model.variants`); "faithful" is the
+#: study's network.
+VARIANTS = ("faithful", "nonneg", "dale", "placecells")
+
 
 def native_bf16() -> bool:
     """Whether this CPU computes bf16 matmuls in hardware (AVX512-BF16 or AMX).
@@ -52,6 +56,19 @@ class ModelConfig:
         the CPU's AMX units, state and gradient accumulation in float32). Forward passes
         without autograd (evaluation, ``record``) always run float32, so a network loaded
         from a file behaves the same whichever precision trained it.
+    variant : str
+        "faithful" (the study's network, the default) or a labelled departure from it:
+        "nonneg", "dale", "placecells" (:mod:`hippo_probe.model.variants`).
+    n_place_cells : int
+        Place cells of the "placecells" output: 256, as many as the units.
+    place_cell_width : float
+        Their tuning width (m): 0.05 m, about the generalized network's error after 100 s
+        (0.08 m) and a sixth of the small arenas' radius, so a handful of cells are active
+        at any position and the decoded centre can resolve the network's precision.
+    place_cell_extent : float
+        Centres uniform in a disk of this radius (m) around the target frame's origin:
+        0.66 m, twice the small arenas' mean radius, the reach of a start-relative
+        position (the generalized task's target).
     """
 
     hidden_size: int = 256
@@ -59,6 +76,10 @@ class ModelConfig:
     input_scale: tuple = (1.0,) * len(FEATURES)
     forget_bias: float = 1.0
     precision: str = "fp32"
+    variant: str = "faithful"
+    n_place_cells: int = 256
+    place_cell_width: float = 0.05
+    place_cell_extent: float = 0.66
 
     #: Largest architecture built, checked before any parameter is allocated: 16,384
     #: units (4 GiB of recurrent weights in float32) and 100,000 classes, far above any
@@ -68,6 +89,11 @@ class ModelConfig:
 
     def __post_init__(self):
         check_option("precision", self.precision, PRECISIONS)
+        check_option("variant", self.variant, VARIANTS)
+        check_number("n_place_cells", self.n_place_cells, low=2, low_inclusive=True,
+                     high=self.MAX_CLASSES, high_inclusive=True, integer=True)
+        for name in ("place_cell_width", "place_cell_extent"):
+            check_number(name, getattr(self, name), low=0)
         check_number("hidden_size", self.hidden_size, low=1, low_inclusive=True,
                      high=self.MAX_HIDDEN, high_inclusive=True, integer=True)
         check_number("n_classes", self.n_classes, low=0, low_inclusive=True,

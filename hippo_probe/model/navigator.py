@@ -7,6 +7,7 @@ from torch import nn
 
 from .config import ModelConfig
 from .lstm import PeepholeLSTM
+from .variants import PlaceCellReadout, VariantLSTM
 
 
 class Navigator(nn.Module):
@@ -31,11 +32,27 @@ class Navigator(nn.Module):
         self.config = config
         self.register_buffer("input_scale",
                              torch.tensor(config.input_scale, dtype=torch.float32))
-        self.lstm = PeepholeLSTM(config.input_size, config.hidden_size, config.forget_bias,
-                                 precision=config.precision)
-        self.position = nn.Linear(config.hidden_size, 2)
+        if config.variant in ("nonneg", "dale"):
+            self.lstm = VariantLSTM(config.input_size, config.hidden_size, config.forget_bias,
+                                    nonneg=True, dale=config.variant == "dale")
+        else:
+            self.lstm = PeepholeLSTM(config.input_size, config.hidden_size,
+                                     config.forget_bias, precision=config.precision)
+        if config.variant == "placecells":
+            self.position = PlaceCellReadout(config.hidden_size, config.n_place_cells,
+                                             config.place_cell_width,
+                                             config.place_cell_extent)
+        else:
+            self.position = nn.Linear(config.hidden_size, 2)
         self.classifier = nn.Linear(config.hidden_size, config.n_classes) \
             if config.n_classes else None
+
+    def position_loss(self, h, target):
+        """The position term of the loss: the mean squared error of the (x, y) readout,
+        or the place cells' cross-entropy for the "placecells" variant."""
+        if isinstance(self.position, PlaceCellReadout):
+            return self.position.loss(h, target)
+        return ((self.position(h) - target) ** 2).mean()
 
     def forward(self, inputs):
         inputs = torch.as_tensor(inputs, dtype=self.input_scale.dtype,

@@ -185,9 +185,12 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
         "speed": ("time", stack_trials(step / batch.dt)),
         "estimate": (("time", "space"), stack_trials(estimate)),
         "arena_vertices": (("environment_id", "vertex", "space"), verts),
-        "position_readout_weight": (("space", "unit"),
-                                    network.position.weight.detach().numpy().copy()),
     }
+    readout = network.position.weight.detach().numpy().copy()
+    if readout.shape[0] == 2:
+        data["position_readout_weight"] = (("space", "unit"), readout)
+    else:                   # the "placecells" variant: a population of place cells
+        data["place_cell_readout_weight"] = (("place_cell", "unit"), readout)
     if prob is not None:
         data["class_probability"] = (("time", "environment_id"),
                                      stack_trials(prob).astype(np.float32))
@@ -206,8 +209,17 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
     if "pf_cov" in rec:
         from ..recording.schema import COV
         rec = rec.assign_coords(cov=("cov", np.array(COV, dtype=object)))
-    rec["position_readout_weight"].attrs.update(
-        units="m", long_name="weight of the (x, y) position readout")
+    if "position_readout_weight" in rec:
+        rec["position_readout_weight"].attrs.update(
+            units="m", long_name="weight of the (x, y) position readout")
+    else:
+        rec["place_cell_readout_weight"].attrs.update(
+            units="1", long_name="weight of the place-cell readout (logits)")
+        rec["place_cell_centre"] = (("place_cell", "space"),
+                                    network.position.centres.numpy().copy(),
+                                    {"units": "m", "long_name": "place cell centre"})
+        rec["place_cell"] = ("place_cell", np.arange(readout.shape[0]),
+                             {"units": "1", "long_name": "place cell"})
     rec["vertex"] = ("vertex", np.arange(verts.shape[1]),
                      {"units": "1", "long_name": "polygon vertex index"})
     rec = annotate(rec)

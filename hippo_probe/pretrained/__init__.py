@@ -91,8 +91,11 @@ def _check_declared_shapes(config, state, path) -> None:
     from ..errors import CheckpointError
 
     h, f = config.hidden_size, config.input_size
-    expected = {"lstm.weight_h": (4 * h, h), "lstm.weight_x": (4 * h, f),
-                "position.weight": (2, h)}
+    expected = {"lstm.weight_h": (4 * h, h), "lstm.weight_x": (4 * h, f)}
+    if getattr(config, "variant", "faithful") == "placecells":
+        expected["position.linear.weight"] = (config.n_place_cells, h)
+    else:
+        expected["position.weight"] = (2, h)
     if config.n_classes:
         expected["classifier.weight"] = (config.n_classes, h)
     for key, shape in expected.items():

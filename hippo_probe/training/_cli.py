@@ -6,7 +6,7 @@ from ..world.config import WORLDS
 
 
 def add_commands(sub):
-    from ..model.config import PRECISIONS
+    from ..model.config import PRECISIONS, VARIANTS
     from .config import TrainConfig
     d = TrainConfig()
     p = sub.add_parser("train", help="train (or resume) a network; see TrainConfig")
@@ -53,6 +53,12 @@ def add_commands(sub):
     p.add_argument("--max-hours", type=float, default=d.max_hours, metavar="H",
                    help="stop before --steps once the run's wall time, summed over resumes, "
                         "passes H hours (default: no cap but the step budget)")
+    p.add_argument("--variant", default=d.variant, choices=VARIANTS,
+                   type=one_of("variant", VARIANTS),
+                   help="the study's network (faithful, default) or a labelled departure: "
+                        "nonneg, dale, placecells (hippo_probe.model.variants)")
+    p.add_argument("--activity-l1", type=float, default=d.activity_l1, metavar="WEIGHT",
+                   help="L1 cost on the units' activity, WEIGHT * mean |h| (default 0)")
     p.add_argument("--snapshot-every", type=count(), default=None, metavar="STEPS",
                    help="save the current parameters every STEPS steps as "
                         "FOLDER/snapshots/step_NNNNNN.pt (default: no snapshots)")
@@ -124,7 +130,8 @@ def _train(a):
                          precision=a.precision,
                          stop_improvement=a.stop_improvement or None,
                          max_hours=a.max_hours or None,
-                         snapshot_every=a.snapshot_every)
+                         snapshot_every=a.snapshot_every, variant=a.variant,
+                         activity_l1=a.activity_l1)
     log = fit(config, a.out, progress=not a.no_progress, cache_dir=a.cache_dir,
               overwrite=a.overwrite)
     if "test" in log:

@@ -6,7 +6,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from .._validators import check_number, check_option, check_positive
-from ..model.config import PRECISIONS
+from ..model.config import PRECISIONS, VARIANTS
 from ..tasks import TASKS
 from ..world.config import WORLDS
 
@@ -88,6 +88,12 @@ class TrainConfig:
         a step here with two runs side by side) 40,000 steps are 8.1 h, while a wall-time
         cap would also count the hours a run spent on slower hardware (float32, or bf16
         emulated) and end it steps short.
+    variant : str
+        "faithful" (the study's network, the default) or a labelled departure:
+        "nonneg", "dale", "placecells" (:mod:`hippo_probe.model.variants`).
+    activity_l1 : float
+        Weight of an L1 cost on the units' activity, ``activity_l1 * mean |h|``, added to
+        the loss (0: none, the study's loss). Used with the "nonneg" and "dale" variants.
     snapshot_every : int or None
         Save the current parameters every this many steps as
         ``snapshots/step_NNNNNN.pt`` in the run folder (loadable by
@@ -119,6 +125,8 @@ class TrainConfig:
     precision: str = "auto"
     stop_improvement: float | None = 0.01
     max_hours: float | None = None
+    variant: str = "faithful"
+    activity_l1: float = 0.0
     snapshot_every: int | None = None
 
     #: fields that do not change the parameters of the steps done (may differ on resume)
@@ -155,6 +163,12 @@ class TrainConfig:
             check_number("stop_improvement", self.stop_improvement, low=0, high=1)
         if self.max_hours is not None:
             check_positive("max_hours", self.max_hours)
+        check_option("variant", self.variant, VARIANTS)
+        check_number("activity_l1", self.activity_l1, low=0, low_inclusive=True)
+        if self.variant in ("nonneg", "dale") and self.precision == "bf16":
+            raise ValueError(f"`precision` 'bf16' is not available for the "
+                             f"{self.variant!r} variant (it trains by plain autograd in "
+                             f"float32); use 'auto' or 'fp32'")
         if self.snapshot_every is not None:
             check_positive("snapshot_every", self.snapshot_every, integer=True)
 

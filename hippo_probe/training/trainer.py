@@ -56,7 +56,7 @@ def build_network(config: TrainConfig) -> Navigator:
         n_classes = task_config("specialized").n_arenas
     model_config = ModelConfig(hidden_size=config.hidden_size, n_classes=n_classes,
                                input_scale=input_scale_for(task.world),
-                               precision=config.precision)
+                               precision=config.precision, variant=config.variant)
     torch.manual_seed(config.init_seed)
     net = Navigator(model_config)
     net.base_network = None
@@ -112,11 +112,19 @@ def _sha1(path) -> str:
 
 
 def losses(net, inputs, target, environment, class_weight, *, classifier_only=False,
-           classify=True):
-    """(total, mse, ce, xy, logits) on one batch of numpy arrays."""
-    xy, logits, _ = net(torch.from_numpy(inputs))
+           classify=True, activity_l1=0.0):
+    """(total, mse, ce, xy, logits) on one batch of numpy arrays.
+
+    ``total = position term + class_weight * ce + activity_l1 * mean |h|``; the position
+    term is the squared error of the (x, y) readout (the place cells' cross-entropy for
+    that variant), ``mse`` always that of the decoded position.
+    """
+    xy, logits, h = net(torch.from_numpy(inputs))
     target = torch.from_numpy(np.asarray(target, dtype=np.float32)).to(xy.device)
     mse = ((xy - target) ** 2).mean()
+    module = getattr(net, "module", net)            # under DDP, the wrapped Navigator
+    position_term = mse if module.config.variant != "placecells" else \
+        module.position_loss(h, target)
     ce = torch.zeros((), device=xy.device)
     if not classify:
         logits = None
@@ -124,7 +132,9 @@ def losses(net, inputs, target, environment, class_weight, *, classifier_only=Fa
         labels = torch.from_numpy(np.asarray(environment)).long().to(xy.device)
         ce = F.cross_entropy(logits.reshape(-1, logits.shape[-1]),
                              labels.repeat(logits.shape[0]))
-    total = class_weight * ce if classifier_only else mse + class_weight * ce
+    total = class_weight * ce if classifier_only else position_term + class_weight * ce
+    if activity_l1 and not classifier_only:
+        total = total + activity_l1 * h.abs().mean()
     return total, mse, ce, xy, logits
 
 
@@ -302,6 +312,8 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
 def _fit_pinned(config, run_dir, progress, cache_dir, stop_after):
     """``_fit`` with the precision resolved and the process's threads pinned."""
     precision = resolve_precision(config.precision)
+    if config.variant in ("nonneg", "dale"):
+        precision = "fp32"          # these variants train by plain autograd in float32
     if precision == "bf16" and config.device == "cpu" and not native_bf16():
         warnings.warn("`precision` 'bf16' on a CPU without AVX512-BF16 or AMX: oneDNN "
                       "emulates it, ~20x slower than fp32 here; use precision='auto'",
@@ -484,7 +496,8 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
             for group in opt.param_groups:
                 group["lr"] = _lr_at(config, step)
             total, mse, ce, _, _ = losses(train_net, inputs, target, env, class_weight,
-                                          classifier_only=classifier_only)
+                                          classifier_only=classifier_only,
+                                          activity_l1=config.activity_l1)
             opt.zero_grad(set_to_none=True)
             total.backward()
             grad_norm = torch.nn.utils.clip_grad_norm_(params, config.clip_norm)

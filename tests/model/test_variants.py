@@ -1,0 +1,78 @@
+"""The model variants beyond the study: each option changes only what it says."""
+
+import numpy as np
+import pytest
+import torch
+
+import hippo_probe as hp
+from hippo_probe.model import ModelConfig, Navigator
+from hippo_probe.model.variants import PlaceCellReadout, VariantLSTM
+from hippo_probe.training import TrainConfig, fit
+
+
+def _net(variant, hidden=16):
+    torch.manual_seed(0)
+    return Navigator(ModelConfig(hidden_size=hidden, variant=variant))
+
+
+@pytest.mark.parametrize("variant", ["nonneg", "dale"])
+def test_non_negative_outputs_are_non_negative_and_otherwise_the_same_cell(variant):
+    net = _net(variant)
+    x = torch.randn(30, 4, 9)
+    _, _, h = net(x)
+    assert (h >= 0).all() and (h > 0).any()
+    # the same parameters as a faithful cell: where tanh(c) > 0 the outputs agree step 1
+    faithful = _net("faithful")
+    faithful.load_state_dict({k: v for k, v in net.state_dict().items()
+                              if not k.endswith("sign")}, strict=False)
+    if variant == "nonneg":
+        _, _, h_f = faithful(x[:1])
+        np.testing.assert_allclose(h[:1].detach(), torch.relu(h_f).detach(), atol=1e-6)
+
+
+def test_the_dale_mask_keeps_every_units_outgoing_signs_through_an_optimizer_step():
+    net = _net("dale")
+    sign = net.lstm.sign
+    assert (sign < 0).sum() == round(0.2 * 16)
+    opt = torch.optim.Adam(net.parameters(), lr=0.5)      # a large step
+    for _ in range(3):
+        xy, _, h = net(torch.randn(20, 4, 9))
+        (xy.square().mean() + h.mean()).backward()
+        opt.step()
+        opt.zero_grad()
+    w = net.lstm.recurrent_weight().detach()
+    # column j holds unit j's outgoing weights: one sign per column, the mask's
+    assert ((w * sign[None, :]) >= 0).all()
+
+
+def test_place_cell_targets_sum_to_one_and_decode_to_the_position():
+    readout = PlaceCellReadout(8, n=2000, width=0.05, extent=0.66, seed=0)
+    xy = torch.tensor([[0.0, 0.0], [0.2, -0.1], [-0.3, 0.25]])
+    q = readout.targets(xy)
+    torch.testing.assert_close(q.sum(-1), torch.ones(3))
+    # the target population, read as a softmax, decodes back to the position (inside the
+    # centres' disk, where the cells are dense)
+    decoded = q @ readout.centres
+    torch.testing.assert_close(decoded, xy, atol=0.01, rtol=0)
+    assert readout.loss(torch.zeros(3, 8), xy) > 0
+
+
+def test_a_variant_trains_saves_and_records_under_its_name(tmp_path):
+    config = TrainConfig(task="generalized", variant="placecells", n_trials=16, steps=2,
+                         batch_size=4, hidden_size=8, validate_every=2, n_validation=4,
+                         n_test=4, precision="fp32")
+    fit(config, tmp_path / "run", cache_dir=tmp_path / "cache", progress=False)
+    net = hp.load_pretrained(tmp_path / "run" / "network.pt")
+    assert net.config.variant == "placecells"
+    assert isinstance(net.position, PlaceCellReadout)
+    rec = hp.record(net, hp.tasks.make_trials("generalized", 2, "test", 0))
+    assert rec.place_cell_readout_weight.dims == ("place_cell", "unit")
+    l1 = TrainConfig(task="generalized", variant="nonneg", activity_l1=0.1, n_trials=16,
+                     steps=2, batch_size=4, hidden_size=8, validate_every=2,
+                     n_validation=4, n_test=4)
+    log = fit(l1, tmp_path / "nonneg", cache_dir=tmp_path / "cache", progress=False)
+    assert log["config"]["variant"] == "nonneg" and log["config"]["activity_l1"] == 0.1
+    assert isinstance(hp.load_pretrained(tmp_path / "nonneg" / "network.pt").lstm,
+                      VariantLSTM)
+    with pytest.raises(ValueError, match="`variant` must be one of"):
+        TrainConfig(variant="grid")

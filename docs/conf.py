@@ -36,6 +36,7 @@ exclude_patterns = ["_build", "generated/*.examples", "auto_examples/*.ipynb",
 autosummary_generate = True
 autodoc_default_options = {"members": False}
 numpydoc_show_class_members = False
+numpydoc_show_inherited_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_validation_checks = set()
 # docstrings cite their own modules in prose; only the pages below are cross-referenced
@@ -54,6 +55,7 @@ sphinx_gallery_conf = {
     "show_memory": False,
     "reset_modules": ("matplotlib",),
     "ignore_pattern": r"(__init__|_paths)\.py",
+    "capture_repr": ("_repr_html_",),     # datasets as tables; figures only as pictures
 }
 
 html_theme = "pydata_sphinx_theme"

@@ -12,7 +12,7 @@ length, with significance from circular time shifts.
 import hippo_probe as hp
 from _paths import MOUSE_NWB
 
-mouse = hp.from_nwb(MOUSE_NWB)
+mouse = hp.from_nwb(MOUSE_NWB, position_units="m")
 adn = mouse.isel(unit=mouse.region.values == "adn") if "region" in mouse.coords else mouse
 hd_mouse = hp.head_direction_tuning(adn, n_shuffles=20)
 hd_mouse.hp.plot()

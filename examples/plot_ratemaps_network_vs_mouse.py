@@ -19,20 +19,26 @@ network
 # Load the mouse session: anterodorsal thalamus and CA1 units, position, head direction.
 from _paths import MOUSE_NWB
 
-mouse = hp.from_nwb(MOUSE_NWB)
+mouse = hp.from_nwb(MOUSE_NWB, position_units="m")
 print(mouse.sizes["unit"], "units,", float(mouse.time[-1] - mouse.time[0]) / 60, "min")
 
 # %%
 # The same call on both: occupancy-normalized maps, smoothed by normalized convolution.
-# The maps are labelled xarray objects; ``.hp.plot()`` draws a grid of them.
+# The maps are labelled xarray objects; ``.hp.plot()`` draws a grid of them. The
+# network's units, in their novel arenas, are smooth gradients ...
 net_maps = hp.ratemaps(network, bin_size=0.04)
-mouse_maps = hp.ratemaps(mouse, bin_size=0.04)
 net_maps.isel(unit=slice(0, 8)).hp.plot()
-mouse_maps.isel(unit=slice(0, 8)).hp.plot()
 
 # %%
-# Skaggs information of each unit (the network's units shifted to a non-negative rate,
-# as the result's attrs say).
-info = hp.spatial_information(net_maps)
-print(info.attrs["nonnegative_rate"] if "nonnegative_rate" in info.attrs else "")
-print(hp.spatial_information(mouse_maps).information.round(3).values)
+# ... and the mouse's cells, in their maze, fire in fields.
+mouse_maps = hp.ratemaps(mouse, bin_size=0.04)
+mouse_maps.isel(unit=slice(0, 8)).hp.plot()
+# sphinx_gallery_thumbnail_number = 2
+
+# %%
+# Skaggs information of each unit. It needs a non-negative rate: the network's signed
+# units are shifted by their minimum, as the result's attrs say.
+net_info = hp.spatial_information(net_maps)
+print(net_info.attrs["rate_offset"])
+print("network:", net_info.information.round(3).values[:8])
+print("mouse:  ", hp.spatial_information(mouse_maps).information.round(3).values)

@@ -12,7 +12,7 @@ import numpy as np
 
 import hippo_probe as hp
 
-# 60 specialized-task trials drawn from the 100 familiar arenas; keep the two arenas
+# 400 specialized-task trials spread over the 100 familiar arenas; keep the two arenas
 # visited most, so each has several trials.
 net = hp.load_pretrained("specialized")
 batch = hp.tasks.make_trials("specialized", n_trials=400, split="test", seed=0)
@@ -25,4 +25,4 @@ print("arenas", two, "trials", rec.sizes["trial_id"])
 # %%
 sim = hp.remapping_similarity(rec, bin_size=0.05)
 sim.hp.plot()
-print({k: round(float(sim.attrs[k]), 3) for k in sim.attrs if k.startswith("median")})
+print(sim["median"].to_series().round(3))

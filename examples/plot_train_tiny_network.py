@@ -27,3 +27,8 @@ net = hp.load_pretrained(run / "network.pt")
 rec = hp.record(net, hp.tasks.make_trials("localization", n_trials=16, split="test", seed=0))
 err = hp.localization_error(rec)
 err.hp.plot()
+
+# %%
+# Forty steps teach it little: its error stays near that of guessing the arena's centre
+# (about 0.6 m in the 1 m arena, start unknown). The shipped localization network, after
+# 11,750 steps of 256 units, errs 0.14 m, close to the optimal particle filter's 0.12 m.

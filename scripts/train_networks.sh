@@ -7,13 +7,13 @@
 # readout follows its generalized network in the same lane. Start it in the background
 # and leave it; `git add runs/*/checkpoint.pt` keeps the progress for the next session:
 #
-#   nohup bash train_queue.sh > logs/queue.log 2>&1 &
+#   nohup bash scripts/train_networks.sh > logs/queue.log 2>&1 &
 #
 # A run already being trained (the same command started twice) is refused by the
 # trainer's lock on its folder, so starting the queue twice does no harm. A run whose
 # network is shipped and whose checkpoint was pruned (git rm) is skipped.
 set -u
-cd "$(dirname "$0")"
+cd "$(dirname "$0")/.."
 mkdir -p logs
 
 train() {                       # NAME TASK SEED [extra options...]

@@ -127,6 +127,12 @@ def test_baselines_refuses_an_existing_out_before_making_any_trial(tmp_path, cap
      "--plot {file} exists and is not a figure file (.png, .pdf, .svg)"),
     (["baselines", "--task", "localization", "--out", "NEW", "--plot", "FILE"],
      "--plot {file} exists and is not a figure file"),
+    (["baselines", "--task", "localization", "--out", "NEW", "--first", "1000000000"],
+     "--first 1000000000: the test split of the localization task holds trials 0 to 999"),
+    (["baselines", "--task", "localization", "--out", "NEW", "--first", "990",
+      "--trials", "20"],
+     "--first 990 --trials 20: the test split of the localization task holds trials 0 to "
+     "999"),
 ])
 def test_outputs_are_refused_before_the_work_naming_the_flag(argv, words, tmp_path, capsys,
                                                              monkeypatch):

@@ -61,8 +61,12 @@ def _baselines(args):
     from .config import BaselineConfig, NaiveBayesConfig
     from .results import error_table, plot_errors, run_baselines, save_baselines
 
-    n_trials = args.trials if args.trials is not None else \
-        task_config(args.task, args.world).split_size(args.split)
+    size = task_config(args.task, args.world).split_size(args.split)
+    n_trials = args.trials if args.trials is not None else size - args.first
+    if args.first >= size or args.first + n_trials > size:
+        asked = f"--first {args.first}" + (f" --trials {n_trials}" if args.trials else "")
+        raise ValueError(f"{asked}: the {args.split} split of the {args.task} task holds "
+                         f"trials 0 to {size - 1}")
     began = time.perf_counter()
     batch = make_trials(args.task, n_trials, args.split, args.seed, first=args.first,
                         world=args.world)

@@ -51,6 +51,7 @@ _LAZY_ATTRS = {
     "correlation_dimension": "hippo_probe.analysis",
     "intrinsic_dimension": "hippo_probe.analysis",
     "localization_error": "hippo_probe.analysis",
+    "map_scorecard": "hippo_probe.analysis",
     "classification_accuracy": "hippo_probe.analysis",
     "AnalysisWarning": "hippo_probe.analysis",
     # cell classes

@@ -16,6 +16,7 @@ from .decode_environment import decode_environment
 from .head_direction_tuning import head_direction_tuning
 from .intrinsic_dimension import intrinsic_dimension
 from .localization_error import localization_error
+from .map_scorecard import map_scorecard
 from .place_field_stability import place_field_stability
 from .ratemaps import ratemaps
 from .remapping_similarity import remapping_similarity
@@ -40,6 +41,7 @@ __all__ = [
     "head_direction_tuning",
     "intrinsic_dimension",
     "localization_error",
+    "map_scorecard",
     "place_field_stability",
     "ratemaps",
     "remapping_similarity",

@@ -557,7 +557,45 @@ class IntrinsicDimensionConfig:
     seed: int = 0
 
 
+@dataclass(frozen=True)
+class ScorecardConfig:
+    """Rules of :func:`~hippo_probe.analysis.map_scorecard.map_scorecard`, fixed before any
+    model variant was trained (the map-ingredient study must not fit its rules to its
+    numbers).
+
+    Attributes
+    ----------
+    max_fields : int
+        A place-like unit has 1 to 3 fields (CA1 place cells in a small box: mostly one,
+        rarely more than three; Park, Dvorak & Fenton 2011).
+    max_field_fraction : float
+        ... covering at most half of the visited area together: a smooth gradient's map
+        thresholded at a fraction of its peak leaves one "field" over most of the arena.
+    place_fraction : float
+        Verdict "place fields": at least 30% of the units are place-like (a CA1 session
+        has a third or more of its active pyramidal cells with fields in a given box).
+    global_across, global_within : float
+        Verdict "global remapping": the median unit's maps correlate below 0.3 across
+        environments while above 0.7 within one (split halves): maps that are stable yet
+        unrelated between arenas (Leutgeb et al. 2005).
+    silent_fraction : float
+        A unit is silent in an environment when its peak rate is below 10% of the
+        population's median peak there.
+    min_bins : int
+        Bins visited in both environments below which a map correlation is NaN (5).
+    """
+
+    max_fields: int = 3
+    max_field_fraction: float = 0.5
+    place_fraction: float = 0.3
+    global_across: float = 0.3
+    global_within: float = 0.7
+    silent_fraction: float = 0.1
+    min_bins: int = 5
+
+
 CONVENTIONS = RecordingConventions()
+SCORECARD = ScorecardConfig()
 COMPUTE = ComputeConfig()
 RATEMAP = RateMapConfig()
 SHUFFLE = ShuffleConfig()

@@ -1,0 +1,56 @@
+"""The map scorecard gives the expected verdicts on populations whose answer is known."""
+
+import numpy as np
+import pytest
+
+import hippo_probe as hp
+from hippo_probe.analysis.map_scorecard import treves_rolls
+from hippo_probe.recording import from_arrays
+
+
+def _population(kind, n_units=24, n_trials=12, n=1500, seed=0):
+    """Units in two environments (trials alternate): Gaussian place fields drawn anew in
+    each environment ("remapping place cells"), or the same planar gradients in both."""
+    rng = np.random.default_rng(seed)
+    env = np.repeat(np.arange(n_trials) % 2, n)
+    heading = np.cumsum(rng.normal(0, 0.3, n * n_trials))
+    xy = np.cumsum(0.02 * np.c_[np.cos(heading), np.sin(heading)], axis=0)
+    xy = np.abs((xy + 0.5) % 2 - 1) - 0.5                       # folded into the 1 m box
+    if kind == "place":
+        centres = rng.uniform(-0.4, 0.4, (2, n_units, 2))        # new fields per arena
+        d2 = ((xy[:, None, :] - centres[env]) ** 2).sum(-1)
+        rate = 10 * np.exp(-d2 / (2 * 0.08 ** 2))
+    else:
+        slopes = rng.normal(size=(n_units, 2))
+        rate = 5 + 3 * xy @ slopes.T                              # the same in both arenas
+    t = np.concatenate([k * (n * 0.1 + 10) + 0.1 * np.arange(1, n + 1)
+                        for k in range(n_trials)])
+    return from_arrays(t, xy, activity=rate, trial=np.repeat(np.arange(n_trials), n),
+                       environment=env, activity_kind="rate")
+
+
+def test_remapping_place_cells_get_both_verdicts():
+    card = hp.map_scorecard(_population("place"), bin_size=0.05)
+    assert card.attrs["place_fields"] and card.attrs["global_remapping"]
+    assert card.fraction_place_like > 0.8
+    assert card.within_map_correlation > 0.8 and abs(card.across_map_correlation) < 0.2
+    assert card.lifetime_sparseness < 0.3
+
+
+def test_planar_gradients_get_neither_verdict():
+    card = hp.map_scorecard(_population("gradient"), bin_size=0.05)
+    assert not card.attrs["place_fields"] and not card.attrs["global_remapping"]
+    assert card.fraction_place_like < 0.2
+    assert card.across_map_correlation > 0.9
+    assert card.lifetime_sparseness > 0.7
+
+
+def test_treves_rolls_sparseness_is_one_for_uniform_and_one_over_n_for_one_active():
+    assert treves_rolls(np.ones(10), 0) == pytest.approx(1.0)
+    assert treves_rolls(np.r_[1.0, np.zeros(9)], 0) == pytest.approx(0.1)
+
+
+def test_one_environment_is_refused():
+    rec = _population("place").pipe(lambda r: hp.select_trials(r, environments=[0]))
+    with pytest.raises(ValueError, match="at least 2 environments"):
+        hp.map_scorecard(rec, bin_size=0.05)

@@ -23,7 +23,8 @@ def treves_rolls(rates, axis) -> np.ndarray:
     """Treves & Rolls (1991) sparseness ``a = <r>^2 / <r^2>`` of non-negative rates along
     ``axis``: 1 for a uniform code, 1/n when one of n entries is active (NaN ignored)."""
     rates = np.asarray(rates, float)
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)     # all-NaN entries stay NaN
         return np.nanmean(rates, axis) ** 2 / np.nanmean(rates ** 2, axis)
 
 

@@ -1,0 +1,117 @@
+"""Which ingredient makes place fields and global remapping emerge? The scorecard per network.
+
+Every network named is recorded on the same trials: ``--trials`` test trials in two fixed
+arenas that none of them trained in (the first two of the specialized task's arenas,
+started at the centre, so the generalized networks' start-relative estimate is in the
+arena frame), and scored by :func:`hippo_probe.map_scorecard` (rules fixed in
+``ScorecardConfig``), beside its localization error against the oracular particle filter
+on ``--pf-trials`` generalized test trials, the median Skaggs information of its units as
+spikes (``hp.poisson_spikes`` at 5 Hz) and their TwoNN dimension. The variants
+(``generalized_nonneg``, ``generalized_dale``, ``generalized_placecells``) are departures
+from the study; ``generalized`` is the study's network.
+
+    python analyses/map_ingredients.py [--networks generalized ...] [--trials 120]
+        [--pf-trials 200] [--out analyses/data/map_ingredients]
+
+Writes ``<out>/scorecard.json``, ``scorecard.csv`` and ``map_ingredients.png`` (rate maps of
+the same 16 units in the two arenas, per network).
+"""
+
+import argparse
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import torch
+
+import hippo_probe as hp
+from hippo_probe._atomic import save_figure, write_text
+from hippo_probe.tasks import make_trials, task_config
+
+ROOT = Path(__file__).resolve().parents[1]
+MEAN_RATE_HZ = 5.0          # the mouse session's median firing rate, rounded
+N_SHOWN = 16
+
+
+def two_arena_trials(n_trials, world):
+    """Test trials in the specialized task's first two arenas, started at the centre."""
+    cfg = dataclasses.replace(task_config("specialized", world), n_arenas=2, classify=False)
+    return make_trials("specialized", n_trials, "test", 0, config=cfg)
+
+
+def localization_ratio(net, n_trials, world):
+    """Network / oracular PF mean error after 100 s on generalized test trials."""
+    batch = make_trials("generalized", n_trials, "test", 0, world=world)
+    pf = hp.baselines.particle_filter(batch, threads=1)
+    rec = hp.record(net, batch, baselines={"estimate_pf": pf.estimate + batch.start[None]})
+    err = hp.localization_error(rec, ["estimate", "estimate_pf"])
+    late = err.trial_time > 100
+    e = err.euclidean.where(late).mean("trial_time")
+    return float(e.sel(estimate="estimate") / e.sel(estimate="estimate_pf"))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--networks", nargs="+", default=["generalized"])
+    ap.add_argument("--trials", type=int, default=120)
+    ap.add_argument("--pf-trials", type=int, default=200)
+    ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "map_ingredients"))
+    a = ap.parse_args()
+    torch.set_num_threads(1)
+    out = Path(a.out)
+    rows, maps = [], {}
+    for name in a.networks:
+        t0 = time.time()
+        net = hp.load_pretrained(name)
+        variant = (net.info.get("config") or {}).get("variant", "faithful")
+        rec = hp.record(net, two_arena_trials(a.trials, net.world))
+        card = hp.map_scorecard(rec, bin_size=0.03)
+        spikes = hp.poisson_spikes(rec, MEAN_RATE_HZ, seed=0)
+        info = hp.spatial_information(spikes, bin_size=0.03, n_shuffles=0)
+        dim = hp.intrinsic_dimension(rec, estimators="TwoNN")
+        row = {"network": name, "variant": variant,
+               "departure_from_study": variant != "faithful",
+               "error_over_pf_after_100s": localization_ratio(net, a.pf_trials, net.world),
+               **{k: float(card[k]) for k in card.data_vars if card[k].ndim == 0},
+               "place_fields": card.attrs["place_fields"],
+               "global_remapping": card.attrs["global_remapping"],
+               "median_information_bits_per_spike": float(info.information.median()),
+               "twonn_dimension": float(dim.dimension.sel(estimator="TwoNN")),
+               "seconds": round(time.time() - t0)}
+        rows.append(row)
+        maps[name] = hp.ratemaps(rec, bin_size=0.03, by="environment")
+        print(json.dumps(row), flush=True)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text(out / "scorecard.json", json.dumps(
+        {"trials": a.trials, "pf_trials": a.pf_trials, "rules": card.attrs["place_rule"]
+         + "; " + card.attrs["remapping_rule"], "rows": rows}, indent=1), what="out")
+    keys = list(rows[0])
+    write_text(out / "scorecard.csv", "\n".join(
+        [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]) + "\n",
+        what="out")
+    fig, axes = plt.subplots(2 * len(maps), N_SHOWN, figsize=(N_SHOWN * 0.9,
+                                                               2 * len(maps) * 0.95),
+                             squeeze=False)
+    for k, (name, m) in enumerate(maps.items()):
+        for e in range(2):
+            for u in range(N_SHOWN):
+                ax = axes[2 * k + e, u]
+                ax.imshow(m.isel(unit=u, environment=e).values, origin="lower",
+                          cmap="viridis")
+                ax.set_xticks([])
+                ax.set_yticks([])
+                if u == 0:
+                    ax.set_ylabel(f"{name}\narena {e}", fontsize=6)
+    fig.suptitle("rate maps of units 0-15 in two arenas (rows), per network", fontsize=8)
+    save_figure(fig, out / "map_ingredients.png", dpi=110)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()

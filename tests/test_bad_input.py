@@ -731,3 +731,25 @@ def test_a_store_linking_outside_itself_is_refused(tmp_path, what):
         os.symlink(twin, chunk)
     with pytest.raises(RecordingError, match="links to .* outside it; refused"):
         open_recording(a)
+
+
+@pytest.mark.parametrize("damage", ["deleted with the marker edited", "copied between arrays"])
+def test_chunks_that_are_not_those_written_are_refused(tmp_path, damage):
+    import json as js
+
+    path = tmp_path / "r.zarr"
+    r = _session()
+    save_recording(r.assign(estimate=r.position * 1.5), path)
+    if damage == "copied between arrays":
+        # position and estimate have the same shape, chunks and dtype: each chunk's own
+        # checksum holds, but it is the other array's chunk
+        src = next(p for p in (path / "position" / "c").rglob("*") if p.is_file())
+        shutil.copy(src, path / "estimate" / "c" / src.relative_to(path / "position" / "c"))
+    else:
+        chunk = next(p for p in (path / "activity" / "c").rglob("*") if p.is_file())
+        chunk.unlink()
+        meta = js.loads((path / "zarr.json").read_text())
+        meta["attributes"]["_hippo_probe_store"]["nchunks"]["activity"] -= 1
+        (path / "zarr.json").write_text(js.dumps(meta))
+    with pytest.raises(RecordingError, match="are not those written"):
+        open_recording(path)

@@ -294,3 +294,50 @@ def write_json(path, obj) -> None:
     write_text(Path(path), json.dumps(obj, indent=1), what="out")
 
 
+
+
+def plot_readout(results: list, *, study: float = 0.85, chance: float = 0.01):
+    """The Fig. 3F curves of fitted readouts and their learning curves, as one Figure.
+
+    ``results`` are :func:`learning_curve` outputs (with ``network`` and, for the
+    variant, ``leaky_tau_choice``), one per network. Left: accuracy against time in trial
+    of the study's readout (``h``, solid) and of the leaky-average variant (dashed), each
+    at its largest training set. Right: accuracy at the last time against the number of
+    training trials.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, (ax_t, ax_n) = plt.subplots(1, 2, figsize=(9.5, 3.6))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for k, res in enumerate(results):
+        color = colors[k % len(colors)]
+        kinds = [("h", "-", "units h (the study's readout)")]
+        leaky = (res.get("leaky_tau_choice") or {}).get("chosen")
+        if leaky:
+            tau = leaky.split("_", 1)[1]
+            kinds.append((leaky, "--", f"leaky average, tau {tau} s (variant)"))
+        for kind, style, what in kinds:
+            if kind not in res["kinds"]:
+                continue
+            rows = res["kinds"][kind]["rows"]
+            times = res["kinds"][kind]["times"]
+            ax_t.plot(times, rows[-1]["test_accuracy"], style, color=color,
+                      label=f"{res['network']}: {what}, {rows[-1]['train_trials']:,} trials")
+            ax_n.plot([r["train_trials"] for r in rows],
+                      [r["test_accuracy"][-1] for r in rows], style, marker="o",
+                      color=color, label=f"{res['network']}: {what}")
+    for ax in (ax_t, ax_n):
+        ax.axhline(study, color="gray", ls=":", lw=1)
+        ax.axhline(chance, color="gray", ls="-", lw=0.5)
+        ax.set_ylim(0, 1)
+        ax.set_ylabel("arena accuracy (test trials)")
+    ax_t.text(5, study + 0.02, "the study, late in the trial", fontsize=7, color="gray")
+    ax_t.set_xlabel("time in trial (s)")
+    ax_t.set_title("F  readout of the frozen generalized network", fontsize=9)
+    ax_n.set_xscale("log")
+    ax_n.set_xlabel("training trials")
+    ax_n.set_title(f"accuracy at {int(results[0]['kinds']['h']['times'][-1])} s vs "
+                   "training-set size", fontsize=9)
+    ax_n.legend(fontsize=5.5, loc="upper left")
+    fig.tight_layout()
+    return fig

@@ -127,3 +127,17 @@ def test_the_exported_readout_gives_the_decoders_logits(tiny, tmp_path):
     assert np.array_equal(logits.argmax(1), dec.predict(flat))
     np.testing.assert_allclose(logits[:, dec.classes_], dec.decision_function(flat),
                                atol=1e-4)
+
+
+def test_the_readout_figure_draws_the_curve_and_the_learning_curve(tiny):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    _, cfg, folder = tiny
+    res = R.learning_curve(folder, "tiny", ["h", "leaky_10"], cfg, progress=False)
+    res.pop("decoders")
+    res.update(network="tiny", leaky_tau_choice={"chosen": "leaky_10"})
+    fig = R.plot_readout([res])
+    left, right = fig.axes
+    assert len(left.lines) >= 2 and right.get_xscale() == "log"
+    assert left.get_xlabel() == "time in trial (s)"

@@ -21,6 +21,8 @@ import warnings
 import numpy as np
 import xarray as xr
 
+from ._accessor import HippoProbeAccessor  # noqa: F401  (``result.hp.plot()``; defined there)
+
 #: Fraction of a map's peak below which a negative minimum is shown as 0 (its colour and
 #: its title): smoothing noise around silent bins, not signed activity.
 NEGLIGIBLE_MINIMUM = 0.01
@@ -647,13 +649,68 @@ def class_fractions(cells, *, ax=None):
     return fig
 
 
+def recording_overview(rec, *, trial=None, n_units=64, fig=None):
+    """A recording at a glance: the path of one trial in its arena, and the activity of
+    its first ``n_units`` units over that trial (a raster of the activity, one row a
+    unit).
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        A recording (schema v1).
+    trial : int, optional
+        The trial shown (default: the first).
+    n_units : int
+        Units shown (default 64).
+    fig : matplotlib.figure.Figure, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    trials = np.asarray(rec["trial_id"].values) if "trial_id" in rec.coords else \
+        np.unique(rec["trial"].values)
+    trial = trials[0] if trial is None else trial
+    one = rec.isel(time=np.flatnonzero(np.asarray(rec["trial"].values) == trial))
+    fig = fig or plt.figure(figsize=(9.0, 3.4))
+    ax_path, ax_act = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 2.2]})
+    xy = np.asarray(one["position"].transpose("time", "space").values, float)
+    if "arena_vertices" in rec and "environment" in one.coords:
+        env = np.asarray(one["environment"].values)[0]
+        verts = np.asarray(rec["arena_vertices"].sel(environment_id=env).values, float)
+        ax_path.fill(verts[:, 0], verts[:, 1], color="0.92", ec="0.4", lw=1)
+    ax_path.plot(xy[:, 0], xy[:, 1], lw=0.7, color="tab:blue")
+    ax_path.set_aspect("equal")
+    ax_path.set_xlabel("x (m)")
+    ax_path.set_ylabel("y (m)")
+    ax_path.set_title(f"trial {trial}: path", fontsize=9)
+    act = one["activity"].transpose("unit", "time").isel(unit=slice(0, n_units))
+    tt = np.asarray(one["trial_time"].values, float)
+    image = ax_act.imshow(np.asarray(act.values, float), aspect="auto", origin="lower",
+                          cmap="viridis", interpolation="nearest",
+                          extent=(tt[0], tt[-1], -0.5, act.sizes["unit"] - 0.5))
+    ax_act.set_xlabel("time in trial (s)")
+    ax_act.set_ylabel("unit (index)")
+    units = rec["activity"].attrs.get("units", "")
+    fig.colorbar(image, ax=ax_act, label=f"{rec['activity'].attrs.get('long_name', 'activity')}"
+                 + (f" ({units})" if units and units != "1" else ""))
+    ax_act.set_title(f"activity of the first {act.sizes['unit']} units", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
 def plot_result(result, **kwargs):
-    """The natural plot of any hippo_probe result (dispatch on ``attrs['analysis']``).
+    """The natural plot of any hippo_probe result (dispatch on ``attrs['analysis']``), or
+    of a recording itself (:func:`recording_overview`).
 
     Keyword arguments go to the specific helper: ``ax=`` for single-axes plots,
     ``fig=`` / ``axes=`` for grids; every helper returns the figure it drew into.
     """
     kind = result.attrs.get("analysis")
+    if kind is None and "schema_version" in result.attrs and "activity" in result:
+        return recording_overview(result, **kwargs)
     if kind == "ratemaps":
         return ratemap_grid(result, **kwargs)
     if kind == "spatial_autocorrelation":
@@ -683,16 +740,3 @@ def plot_result(result, **kwargs):
         return cumulative(result[per_unit[kind]], title=kind.replace("_", " "), **kwargs)
     raise ValueError(f"no hippo_probe plot for a result with attrs['analysis'] = {kind!r}; "
                      "expected the output of a hippo_probe analysis")
-
-
-@xr.register_dataarray_accessor("hp")
-@xr.register_dataset_accessor("hp")
-class HippoProbeAccessor:
-    """``result.hp.plot()``: the natural plot of a hippo_probe result, as a Figure."""
-
-    def __init__(self, obj):
-        self._obj = obj
-
-    def plot(self, **kwargs):
-        """Plot the result; keyword arguments go to the specific plot helper."""
-        return plot_result(self._obj, **kwargs)

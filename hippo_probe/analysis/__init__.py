@@ -3,10 +3,10 @@
 Each analysis is a plain function of a recording (an ``xarray.Dataset``) returning
 labelled xarray objects whose ``attrs`` say how they were made; each works on dask-backed
 (lazy) recordings and never imports torch. Results plot themselves through the ``hp``
-accessor (``maps.hp.plot()``), registered by :mod:`hippo_probe.plot`.
+accessor (``maps.hp.plot()``), registered with the recording and analysis packages.
 """
 
-from .. import plot as _plot  # noqa: F401  (registers the ``.hp`` xarray accessor)
+from .. import _accessor  # noqa: F401  (registers the ``.hp`` xarray accessor)
 from ._common import AnalysisWarning
 from .classification_accuracy import classification_accuracy
 from .context_cells import context_cells

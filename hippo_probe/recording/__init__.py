@@ -5,6 +5,7 @@ A recording is a plain ``xarray.Dataset`` stored as a zarr store; see
 names, dims, units and long names in one table. Nothing here imports torch.
 """
 
+from .. import _accessor  # noqa: F401  (registers the ``.hp`` xarray accessor)
 from .arrays import bin_spikes, from_arrays
 from .config import DEFAULTS, RecordingConfig
 from .layout import stack_trials, trial_aligned_chunks, trial_blocks, trial_layout

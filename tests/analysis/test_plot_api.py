@@ -191,3 +191,18 @@ def test_mouse_session_polars_tell_adn_from_ca1(mouse):
     fig = maps.hp.plot()
     assert _colorbar_axes(fig)[0].get_ylabel() == "firing rate (Hz)"
     assert all(" Hz" in ax.get_title() for ax in fig.axes if ax.images)
+
+
+def test_a_recording_plots_itself_as_an_overview():
+    import numpy as np
+
+    from hippo_probe.recording import from_arrays
+
+    rng = np.random.default_rng(0)
+    t = np.concatenate([np.arange(1, 101) * 0.1, 20 + np.arange(1, 101) * 0.1])
+    rec = from_arrays(t, rng.uniform(-0.5, 0.5, (200, 2)), activity=rng.random((200, 5)),
+                      trial=np.repeat([0, 1], 100), activity_kind="rate")
+    fig = rec.hp.plot()
+    path, act = fig.axes[:2]
+    assert path.get_xlabel() == "x (m)" and act.get_xlabel() == "time in trial (s)"
+    assert act.images[0].get_array().shape == (5, 100)      # the first trial, all units

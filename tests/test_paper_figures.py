@@ -50,6 +50,8 @@ def test_figures_write_only_under_out(figures_run):
     (paper_figures/png, RESULTS.md) are refreshed only by --refresh-tracked."""
     out, before, after = figures_run
     assert (out / "RESULTS.md").stat().st_size > 1000
+    # a tiny run's verdicts mean nothing, and its RESULTS.md says so first
+    assert "every verdict means nothing" in (out / "RESULTS.md").read_text().split("\n")[2]
     assert (out / "network_vs_rodent.json").exists()
     assert (out / "ablation.png").stat().st_size > 1000
     assert (out / "cache" / "paper-tiny").is_dir()       # the cached recordings, under out

@@ -164,6 +164,12 @@ def _evaluate(a):
     if broken:
         raise ValueError(f"the network {str(a.checkpoint)!r} gives non-finite results "
                          f"({', '.join(broken)}): its parameters are broken")
+    if net.classifier is None or task != "specialized":
+        # a network without an arena readout (or scored off its task) has no such term
+        for key in ("ce", "loss"):
+            metrics.pop(key, None)
+    # four significant digits: what the test split's sampling error leaves meaningful
+    shown = {k: (float(f"{v:.4g}") if isinstance(v, float) else v) for k, v in metrics.items()}
     print(json.dumps({"network": str(a.checkpoint), "task": task, "world": world,
                       "network_world": net.world, "split": a.split,
-                      "trials": a.trials, **metrics}, indent=1))
+                      "trials": a.trials, **shown}, indent=1))

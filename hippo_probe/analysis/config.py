@@ -450,14 +450,15 @@ class ConjunctiveConfig:
         coarse bins for the factorial model).
     n_iterations, tolerance : int, float
         The factorial model is iterated until the factors change by less than 1e-5
-        (relative) or 50 times.
+        (relative) or 500 times (it converges linearly; on the mouse session's units 50
+        iterations left changes of up to 1.5e-3).
     batch : int
         Shuffles whose joint sums are held at once (memory ``batch x units x cells``).
     """
 
     n_bins: int = 16
     n_directions: int = 12
-    n_iterations: int = 50
+    n_iterations: int = 500
     tolerance: float = 1e-5
     batch: int = 10
 

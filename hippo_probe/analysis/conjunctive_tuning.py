@@ -18,6 +18,11 @@ from .ratemaps import _positions, position_bins, spatial_grid, tuning_sums
 from .spatial_information import skaggs_information
 
 
+def _ratio(num, den):
+    """``num / den`` where ``den > 0``, else 0."""
+    return np.divide(num, den, out=np.zeros(np.broadcast(num, den).shape), where=den > 0)
+
+
 def factorize(sums, counts, n_iterations, tolerance):
     """Maximum-likelihood factorial model of joint (direction x position) tuning.
 
@@ -56,12 +61,14 @@ def factorize(sums, counts, n_iterations, tolerance):
     n_iter = 0
     with np.errstate(invalid="ignore", divide="ignore"):
         for n_iter in range(1, n_iterations + 1):
-            f_new = np.where(occ_x, s_x / (g @ counts), 0.0)
-            g_new = np.where(occ_d, s_d / (f_new @ counts.T), 0.0)
-            g_new = np.nan_to_num(g_new)
+            # a bin whose expected count is 0 (visited only in directions, or at places,
+            # where the unit is silent) has factor 0, not 0/0: a NaN there would spread
+            # through the next product and reset the whole model every other iteration
+            f_new = _ratio(s_x, g @ counts) * occ_x
+            g_new = _ratio(s_d, f_new @ counts.T) * occ_d
             scale = (g_new * w_d).sum(-1, keepdims=True)
             g_new = np.where(scale > 0, g_new / scale, 1.0)
-            f_new = np.nan_to_num(f_new) * np.where(scale > 0, scale, 1.0)
+            f_new = f_new * np.where(scale > 0, scale, 1.0)
             # relative change of each map on its own scale: a weak unit converges too
             peak = np.maximum(np.abs(f_new).max(-1), 1e-300)
             change = (np.abs(f_new - f).max(-1) / peak).max() if f_new.size else 0.0

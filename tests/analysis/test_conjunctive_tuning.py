@@ -83,3 +83,23 @@ def test_arguments_are_checked(conj_rec):
         hp.conjunctive_tuning(conj_rec.drop_vars("head_direction"))
     with pytest.raises(ValueError, match="`n_directions` must be >= 2; got 1"):
         hp.conjunctive_tuning(conj_rec, n_directions=1)
+
+
+def test_the_factorial_model_converges_for_a_unit_silent_in_some_directions():
+    """A place visited only in directions where the unit never fires has an expected count
+    of 0: its factor is 0, and the model converges instead of resetting every other
+    iteration (as it did while 0/0 spread NaN through the next product)."""
+    import warnings
+
+    from hippo_probe.analysis.conjunctive_tuning import factorize
+
+    counts = np.array([[5.0, 5, 0], [5, 5, 0], [5, 5, 0], [0, 0, 8]])   # place 2: dir 3 only
+    sums = np.array([[[4.0, 2, 0], [3, 1, 0], [0, 0, 0], [0, 0, 0]]])   # silent in 2 and 3
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        f, g, n_iter = factorize(sums, counts, 500, 1e-10)
+    assert n_iter < 500 and np.isfinite(f).all() and np.isfinite(g).all()
+    assert f[0, 2] == 0 and g[0, 3] == 0
+    # the model reproduces the observed sums where it can (a product of the factors)
+    fitted = g[0][:, None] * f[0][None, :] * counts
+    np.testing.assert_allclose(fitted.sum(0), sums[0].sum(0), rtol=1e-6)

@@ -49,6 +49,8 @@ def main():
                          "networks (e.g. a run's snapshots/step_*.pt; named by the run "
                          "folder and the file's name)")
     ap.add_argument("--sizes", type=int, nargs="+", default=list(R.READOUT.sizes))
+    ap.add_argument("--taus", type=float, nargs="+", default=list(R.READOUT.taus),
+                    help="time constants (s) of the leaky-average variant tried")
     ap.add_argument("--tau-size", type=int, default=16000,
                     help="training trials at which the variant's time constant is chosen")
     ap.add_argument("--kinds", nargs="+", default=["h", "leaky"],
@@ -71,7 +73,7 @@ def main():
         print(f"saved {Path(a.out) / 'arena_readout.png'} from {len(files)} networks")
         return
     torch.set_num_threads(1)
-    cfg = replace(R.READOUT, sizes=tuple(a.sizes))
+    cfg = replace(R.READOUT, sizes=tuple(a.sizes), taus=tuple(a.taus))
     base = network_name("generalized", a.world)
     if a.networks:
         nets = {f"{Path(f).resolve().parents[1].name}_{Path(f).stem}": hp.load_pretrained(f)
@@ -91,7 +93,7 @@ def main():
         res = R.learning_curve(a.features, name, ["h"] if "h" in a.kinds else [], cfg)
         decoders = res.pop("decoders")
         if "leaky" in a.kinds:
-            small = tuple(n for n in cfg.sizes if n <= a.tau_size)
+            small = (a.tau_size,)          # the time constant is chosen at one size
             scan = R.learning_curve(a.features, name, R.feature_kinds(cfg)[1:], cfg,
                                     sizes=small)
             scan.pop("decoders")

@@ -20,7 +20,7 @@ from pathlib import Path
 
 # modules that define ``add_commands(subparsers)``; in the order shown by --help
 _COMMAND_MODULES = (
-    "hippo_probe.world._cli",
+    "hippo_probe.trial_stats._cli",
     "hippo_probe.training._cli",
     "hippo_probe.model._cli",
     "hippo_probe.baselines._cli",

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..recording.schema import SIGNED_KINDS
+
 
 @dataclass(frozen=True)
 class RecordingConventions:
@@ -40,7 +42,7 @@ class RecordingConventions:
         more).
     """
 
-    signed_kinds: tuple = ("lstm_hidden",)
+    signed_kinds: tuple = SIGNED_KINDS
     noise_free_kinds: tuple = ("lstm_hidden",)
     spike_kinds: tuple = ("spike_count",)
     nonnegative_kinds: tuple = ("spike_count", "rate")

@@ -27,6 +27,10 @@ ACTIVITY_UNITS = {
     "rate": "Hz",
 }
 
+#: ``activity_kind`` values whose activity is signed (the LSTM's h lies in (-1, 1)): a
+#: measure that needs a non-negative rate shifts each unit by its minimum.
+SIGNED_KINDS = ("lstm_hidden",)
+
 #: Dataset attrs every recording must carry, with the Python types they may take.
 REQUIRED_ATTRS = {
     "schema_version": (int, np.integer),

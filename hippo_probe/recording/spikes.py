@@ -14,6 +14,7 @@ import xarray as xr
 
 from .._validators import check_nonnegative_int, check_number
 from ..errors import RecordingError
+from .schema import SIGNED_KINDS
 from .validate import check_analysable
 
 
@@ -98,10 +99,8 @@ def poisson_spikes(rec, mean_rate, seed=0):
     dt = rec.attrs.get("dt")
     if dt is None or not np.isfinite(dt) or dt <= 0:
         raise RecordingError(f"`rec.attrs['dt']` must be the sample interval in s; got {dt!r}")
-    from ..analysis.config import CONVENTIONS
-
     act = rec["activity"]
-    floor = act.min("time") if kind in CONVENTIONS.signed_kinds else xr.zeros_like(
+    floor = act.min("time") if kind in SIGNED_KINDS else xr.zeros_like(
         act.isel(time=0, drop=True))
     # mean(a - m) = mean(a) - m: both reductions stream over the chunks together (taking
     # the mean of a - m would hold every chunk until the minimum is known)

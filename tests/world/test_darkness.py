@@ -8,7 +8,7 @@ import pytest
 
 from hippo_probe.tasks import TASKS, make_trials, task_config
 from hippo_probe.world import FEATURES, NoiseModel, WorldConfig, wrap_angle, world_config
-from hippo_probe.world.stats import drift_rates
+from hippo_probe.trial_stats.stats import drift_rates
 
 # sha1 of inputs + positions + starts of trials 0-2 of each task's test split, seed 0,
 # computed from the compass world before the darkness world existed: the compass world's

@@ -2,7 +2,7 @@
 
 from ..cli import check_output, count, one_of
 from ..tasks import SPLITS
-from .config import WORLDS
+from ..world.config import WORLDS
 
 
 def add_commands(sub):

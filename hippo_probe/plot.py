@@ -21,8 +21,6 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from ._accessor import HippoProbeAccessor  # noqa: F401  (``result.hp.plot()``; defined there)
-
 #: Fraction of a map's peak below which a negative minimum is shown as 0 (its colour and
 #: its title): smoothing noise around silent bins, not signed activity.
 NEGLIGIBLE_MINIMUM = 0.01

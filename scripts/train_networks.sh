@@ -34,7 +34,8 @@ train() {                       # NAME TASK SEED [extra options...]
     echo "$(date -u +%FT%TZ) $name failed (exit $rc): see logs/$name.log"
     return "$rc"
   fi
-  hippo-probe export-network "runs/$name" "$shipped" >> "logs/$name.log" 2>&1 &&
+  hippo-probe export-network "runs/$name" "$shipped" --dest hippo_probe/pretrained \
+    >> "logs/$name.log" 2>&1 &&
     echo "$(date -u +%FT%TZ) done $name -> hippo_probe/pretrained/$shipped.pt"
 }
 

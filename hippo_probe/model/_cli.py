@@ -37,8 +37,9 @@ def add_commands(sub):
                    help="run directory of `hippo-probe train` (holds network.pt and log.json)")
     e.add_argument("name", metavar="NAME",
                    help="pretrained name to ship it under (e.g. generalized)")
-    e.add_argument("--dest", default=None, metavar="FOLDER",
-                   help="folder to write into (default: hippo_probe/pretrained)")
+    e.add_argument("--dest", required=True, metavar="FOLDER",
+                   help="folder to write into (the repository's shipped networks: "
+                        "hippo_probe/pretrained)")
     e.set_defaults(run=_export)
 
     n = sub.add_parser("networks", help="the shipped networks, their training seeds and "
@@ -81,9 +82,8 @@ def _record(a):
 def _export(a):
     from ..training.export import export_network
 
-    if a.dest is not None:
-        check_output("--dest", a.dest, kind="folder")
-    paths = export_network(a.run_dir, a.name, dest=a.dest)
+    check_output("--dest", a.dest, kind="folder")
+    paths = export_network(a.run_dir, a.name, a.dest)
     print("\n".join(f"wrote {p}" for p in paths))
 
 

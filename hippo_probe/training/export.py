@@ -7,7 +7,6 @@ import re
 from pathlib import Path
 
 from .._atomic import write_text
-from ..pretrained import HERE
 from .checkpoint import load, require, save_atomic
 
 
@@ -39,7 +38,7 @@ def _jsonable(obj):
     return obj
 
 
-def export_network(run_dir, name: str, dest=None) -> list:
+def export_network(run_dir, name: str, dest) -> list:
     """Write ``<dest>/<name>.pt`` (best parameters so far, architecture, task, test
     metrics if the run finished) and ``<dest>/<name>.log.json`` (the training log; its
     per-step entries thinned to every ``train_every``-th step, at most
@@ -52,7 +51,8 @@ def export_network(run_dir, name: str, dest=None) -> list:
         raise ValueError(f"`name` must be letters, digits, '_' or '-' (a file name inside "
                          f"the destination, e.g. 'generalized_s1'); got {name!r}")
     run_dir = Path(run_dir)
-    dest = Path(dest or HERE)        # made (with its parents) by the first write into it
+    # the destination is always the caller's: the package never writes into its own folder
+    dest = Path(dest)                # made (with its parents) by the first write into it
     ckpt = require(load(run_dir / "checkpoint.pt"),
                    ("log", "step", "config", "model", "best_model", "best_loss",
                     "model_config", "task"), run_dir / "checkpoint.pt", "export a network")

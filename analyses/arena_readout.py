@@ -60,17 +60,23 @@ def main():
     ap.add_argument("--export", default=None, metavar="FOLDER")
     ap.add_argument("--no-progress", action="store_true")
     ap.add_argument("--plot-only", action="store_true",
-                    help="only draw <out>/arena_readout.png from the JSON files in --out")
+                    help="only draw <out>/arena_readout.png and tabulate arena_readout.md "
+                         "from the JSON files in --out")
     a = ap.parse_args()
     if a.plot_only:
         import json
 
         from hippo_probe._atomic import save_figure
 
+        from hippo_probe._atomic import write_text
+
         files = sorted(Path(a.out).glob("*.json"))
-        fig = R.plot_readout([json.loads(f.read_text()) for f in files])
+        results = [json.loads(f.read_text()) for f in files]
+        fig = R.plot_readout(results)
         save_figure(fig, Path(a.out) / "arena_readout.png", dpi=130)
-        print(f"saved {Path(a.out) / 'arena_readout.png'} from {len(files)} networks")
+        write_text(Path(a.out) / "arena_readout.md", R.readout_table(results), what="out")
+        print(f"saved {Path(a.out) / 'arena_readout.png'} and arena_readout.md from "
+              f"{len(files)} networks")
         return
     torch.set_num_threads(1)
     cfg = replace(R.READOUT, sizes=tuple(a.sizes), taus=tuple(a.taus))

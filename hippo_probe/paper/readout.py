@@ -296,6 +296,26 @@ def write_json(path, obj) -> None:
 
 
 
+def readout_table(results: list) -> str:
+    """A Markdown table of fitted readouts: per network, feature kind and training-set
+    size, the chosen C and the test accuracy at 100 s and 200 s (the variant's time
+    constant named; ``*`` marks the time constant chosen on validation trials)."""
+    lines = ["| network | features | training trials | C | accuracy at 100 s | "
+             "accuracy at 200 s |", "| --- | --- | --- | --- | --- | --- |"]
+    for res in results:
+        chosen = (res.get("leaky_tau_choice") or {}).get("chosen")
+        for kind, v in res["kinds"].items():
+            times = v["times"]
+            i100, i200 = times.index(100.0), times.index(200.0)
+            what = "units h (the study's)" if kind == "h" else \
+                f"leaky average, tau {kind.split('_', 1)[1]} s" + (" *" if kind == chosen else "")
+            for row in v["rows"]:
+                acc = row["test_accuracy"]
+                lines.append(f"| {res['network']} | {what} | {row['train_trials']:,} | "
+                             f"{row['c']:g} | {acc[i100]:.3f} | {acc[i200]:.3f} |")
+    return "\n".join(lines) + "\n"
+
+
 def plot_readout(results: list, *, study: float = 0.85, chance: float = 0.01):
     """The Fig. 3F curves of fitted readouts and their learning curves, as one Figure.
 

@@ -63,6 +63,9 @@ def main():
                     help="only draw <out>/arena_readout.png and tabulate arena_readout.md "
                          "from the JSON files in --out")
     a = ap.parse_args()
+    if a.export and a.networks:
+        ap.error("--export ships the shipped networks' readouts; it cannot be combined "
+                 "with --networks")
     if a.plot_only:
         import json
 

@@ -138,7 +138,7 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
 
     scalars = {
         "fraction_place_like": (float(place_like.mean()), "1",
-                                "units with 1-3 compact fields"),
+                                f"units with 1-{cfg.max_fields} compact fields"),
         "median_field_area": (med(field_areas), "m^2", "median area of their fields"),
         "within_map_correlation": (med(within), "1",
                                    "median split-half map correlation, same environment"),

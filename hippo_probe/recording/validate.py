@@ -30,6 +30,10 @@ _FINITE_CHECKS = {
 }
 
 
+#: float32's spacing near pi: an angle in [-pi, pi) stored as float32 may read this far out
+_ANGLE_ROUNDING = 2.5e-7
+
+
 def _v(value):
     """repr of a value, numpy scalars shown as plain Python numbers."""
     return repr(value.item() if isinstance(value, np.generic) else value)
@@ -301,7 +305,8 @@ def check_block(name, values, origin=None):
         what = "inf" if allow_nan else "NaN or inf"
         _fail(name, f"must not contain {what}; found {value_at(idx)} at index {idx}")
     if name == "head_direction":
-        out = (values < -np.pi) | (values >= np.pi)
+        # float32 storage may round an angle just below pi up to float32(pi)
+        out = (values < -np.pi - _ANGLE_ROUNDING) | (values >= np.pi + _ANGLE_ROUNDING)
         if out.any():
             idx = where(out)
             _fail(name, f"must be in radians in [-pi, pi); got {value_at(idx)} at index "
@@ -386,7 +391,7 @@ def check_analysable(rec, *, name="rec"):
         if not np.isfinite(time).all():
             i = _first_bad(~np.isfinite(time))
             _fail("time", f"must be finite; got {_v(time[i])} at index {i}")
-        step = np.diff(time)
+        step = np.diff(time.astype(np.float64))     # unsigned times would wrap
         bad = step <= 0
         if trial is not None:
             bad &= trial[1:] == trial[:-1]

@@ -563,7 +563,7 @@ def test_nonsense_options_and_inputs_are_refused(tmp_path):
 
 
 def test_suspicious_units_are_warned_about():
-    with pytest.warns(UserWarning, match="it looks like degrees"):
+    with pytest.warns(UserWarning, match="if it is in degrees, pass np.deg2rad"):
         from_arrays(T, XY, activity=np.ones((400, 1)),
                     head_direction=np.linspace(0, 359, 400))
     with pytest.warns(UserWarning, match="every spike of 1 of 2 units .* falls outside"):

@@ -261,8 +261,8 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
         check_finite("head_direction", head_direction, allow_nan=True)
         if np.nanmax(np.abs(head_direction), initial=0.0) > 2 * np.pi + 1e-9:
             warnings.warn(f"`head_direction` spans up to {np.nanmax(head_direction):.4g}, "
-                          f"more than 2 pi: it looks like degrees; the schema's head "
-                          f"direction is in radians (pass np.deg2rad(...))", UserWarning,
+                          f"more than 2 pi: if it is in degrees, pass np.deg2rad(...) "
+                          f"(unwrapped radians are fine: they are wrapped to [-pi, pi))", UserWarning,
                           stacklevel=2)
         rec["head_direction"] = "time", wrap_angle(head_direction)
     return validate(annotate(rec))

@@ -14,7 +14,7 @@ import xarray as xr
 
 from . import _common
 from .config import SCORECARD as CFG
-from .place_field_stability import place_field_stability
+from .place_field_stability import pearson_masked, place_field_stability
 from .place_fields import place_fields
 from .ratemaps import ratemaps
 
@@ -26,14 +26,6 @@ def treves_rolls(rates, axis) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)     # all-NaN entries stay NaN
         return np.nanmean(rates, axis) ** 2 / np.nanmean(rates ** 2, axis)
-
-
-def _pair_correlation(a, b, min_bins):
-    """Pearson correlation of two maps over the bins finite in both (NaN if too few)."""
-    ok = np.isfinite(a) & np.isfinite(b)
-    if ok.sum() < min_bins or np.std(a[ok]) == 0 or np.std(b[ok]) == 0:
-        return np.nan
-    return float(np.corrcoef(a[ok], b[ok])[0, 1])
 
 
 def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None):
@@ -115,17 +107,19 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
     field_areas = area[place_like] if place_like.any() else np.array([np.nan])
 
     within = place_field_stability(rec, **opts)["stability"].values
-    across = [_pair_correlation(flat[u, i], flat[u, j], cfg.min_bins)
-              for u in range(n_units)
-              for i in range(len(envs)) for j in range(i + 1, len(envs))]
+    pairs = [(i, j) for i in range(len(envs)) for j in range(i + 1, len(envs))]
+    # each unit's maps in two environments, over the bins visited in both
+    across = np.concatenate([pearson_masked(flat[:, i], flat[:, j], cfg.min_bins)[0]
+                             for i, j in pairs])
     pv = []
-    for i in range(len(envs)):
-        for j in range(i + 1, len(envs)):
-            both = np.isfinite(flat[:, i]).all(0) & np.isfinite(flat[:, j]).all(0)
-            a, b = flat[:, i][:, both], flat[:, j][:, both]
-            a = a - a.mean(1, keepdims=True)
-            b = b - b.mean(1, keepdims=True)
-            pv += [_pair_correlation(a[:, k], b[:, k], 2) for k in range(a.shape[1])]
+    for i, j in pairs:
+        both = np.isfinite(flat[:, i]).all(0) & np.isfinite(flat[:, j]).all(0)
+        a, b = flat[:, i][:, both], flat[:, j][:, both]
+        a = a - a.mean(1, keepdims=True)
+        b = b - b.mean(1, keepdims=True)
+        # population vectors: one per bin, the units along the last axis
+        pv.append(pearson_masked(a.T, b.T, 2)[0])
+    pv = np.concatenate(pv) if pv else np.array([])
 
     peak = np.nanmax(flat, axis=-1)                                  # (unit, env)
     silent = peak < cfg.silent_fraction * np.nanmedian(peak, axis=0, keepdims=True)
@@ -144,7 +138,8 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
                                    "median split-half map correlation, same environment"),
         "across_map_correlation": (med(across), "1",
                                    "median map correlation across environments"),
-        "population_vector_correlation": (float(np.nanmean(pv)) if len(pv) else np.nan,
+        "population_vector_correlation": (float(np.nanmean(pv)) if np.isfinite(pv).any()
+                                          else np.nan,
                                           "1", "population-vector correlation across "
                                           "environments, unit means removed"),
         "lifetime_sparseness": (med(lifetime), "1", "Treves-Rolls lifetime sparseness"),

@@ -50,7 +50,8 @@ def main():
                          "folder and the file's name)")
     ap.add_argument("--sizes", type=int, nargs="+", default=list(R.READOUT.sizes))
     ap.add_argument("--taus", type=float, nargs="+", default=list(R.READOUT.taus),
-                    help="time constants (s) of the leaky-average variant tried")
+                    help="time constants (s) of the leaky-average variant tried "
+                         "('inf': the running mean)")
     ap.add_argument("--tau-size", type=int, default=16000,
                     help="training trials at which the variant's time constant is chosen")
     ap.add_argument("--kinds", nargs="+", default=["h", "leaky"],
@@ -58,6 +59,8 @@ def main():
     ap.add_argument("--features", default=str(ROOT / "cache" / "readout"))
     ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "arena_readout"))
     ap.add_argument("--export", default=None, metavar="FOLDER")
+    ap.add_argument("--extract-only", action="store_true",
+                    help="only write the features (to fit later, e.g. on another core)")
     ap.add_argument("--no-progress", action="store_true")
     ap.add_argument("--plot-only", action="store_true",
                     help="only draw <out>/arena_readout.png and tabulate arena_readout.md "
@@ -82,7 +85,7 @@ def main():
               f"{len(files)} networks")
         return
     torch.set_num_threads(1)
-    cfg = replace(R.READOUT, sizes=tuple(a.sizes), taus=tuple(a.taus))
+    cfg = replace(R.READOUT, sizes=tuple(sorted(set(a.sizes))), taus=tuple(a.taus))
     base = network_name("generalized", a.world)
     if a.networks:
         nets = {f"{Path(f).resolve().parents[1].name}_{Path(f).stem}": hp.load_pretrained(f)
@@ -92,18 +95,21 @@ def main():
     for net in nets.values():
         net.eval()
     t0 = time.time()
+    n_train = max(max(cfg.sizes), a.tau_size if "leaky" in a.kinds else 0)
     for split, n in (("validation", cfg.n_validation), ("test", cfg.n_test),
-                     ("train", max(cfg.sizes))):
-        R.extract_features(nets, split, n, a.features, world=a.world, cfg=cfg,
-                           progress=not a.no_progress)
+                     ("train", n_train)):
+        keys = R.extract_features(nets, split, n, a.features, world=a.world, cfg=cfg,
+                                  progress=not a.no_progress)
     print(f"features: {time.time() - t0:.0f} s", flush=True)
+    if a.extract_only:
+        return
     for name, net in nets.items():
-        t1 = time.time()
-        res = R.learning_curve(a.features, name, ["h"] if "h" in a.kinds else [], cfg)
+        t1, key = time.time(), keys[name]
+        res = R.learning_curve(a.features, key, ["h"] if "h" in a.kinds else [], cfg)
         decoders = res.pop("decoders")
         if "leaky" in a.kinds:
             small = (a.tau_size,)          # the time constant is chosen at one size
-            scan = R.learning_curve(a.features, name, R.feature_kinds(cfg)[1:], cfg,
+            scan = R.learning_curve(a.features, key, R.feature_kinds(cfg)[1:], cfg,
                                     sizes=small)
             scan.pop("decoders")
             at = {k: v["rows"][-1]["validation_accuracy_late"]
@@ -112,13 +118,14 @@ def main():
             res["leaky_tau_choice"] = {"train_trials": small[-1],
                                        "validation_accuracy_late": at, "chosen": best}
             res["kinds"].update(scan["kinds"])
-            big = tuple(n for n in cfg.sizes if n > a.tau_size)
-            if big:
-                more = R.learning_curve(a.features, name, [best], cfg, sizes=big,
-                                        start_c=scan["kinds"][best]["rows"][-1]["c"])
+            others = tuple(n for n in cfg.sizes if n != a.tau_size)
+            if others:
+                more = R.learning_curve(a.features, key, [best], cfg, sizes=others)
                 more.pop("decoders")
-                res["kinds"][best]["rows"] += more["kinds"][best]["rows"]
-        res.update(network=name, world=a.world, config=asdict(cfg),
+                rows = res["kinds"][best]["rows"] + more["kinds"][best]["rows"]
+                res["kinds"][best]["rows"] = sorted(rows, key=lambda r: r["train_trials"])
+        res.update(network=name, features=key, world=a.world,
+                   config=dict(asdict(cfg), taus=[str(t) for t in cfg.taus]),
                    fit_seconds=round(time.time() - t1))
         R.write_json(Path(a.out) / f"{name}.json", res)
         if a.export and "h" in decoders:

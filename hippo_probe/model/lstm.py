@@ -639,17 +639,25 @@ class PeepholeLSTM(nn.Module):
                 f"precision={self.precision!r}")
 
 
+def peephole_step(xw_t, h, c, weight_h, bias, weight_peephole, nonneg: bool = False):
+    """One step of the peephole LSTM (the equations above) by plain autograd, given the
+    step's input projection ``x_t W_x^T``; with ``nonneg`` the output is ``o * relu(tanh
+    c)`` (the non-negative variants of :mod:`.variants`)."""
+    H = weight_h.shape[1]
+    z = xw_t + h @ weight_h.t() + bias
+    zi, zf, zg, zo = z.split(H, dim=1)
+    i = torch.sigmoid(zi + weight_peephole[0] * c)
+    f = torch.sigmoid(zf + weight_peephole[1] * c)
+    c = f * c + i * torch.tanh(zg)
+    o = torch.sigmoid(zo + weight_peephole[2] * c)
+    squashed = torch.tanh(c)
+    return o * (torch.relu(squashed) if nonneg else squashed), c
+
+
 def reference_peephole_lstm(x, h0, c0, weight_x, weight_h, bias, weight_peephole):
     """Plain-autograd peephole LSTM (slow, obviously correct), for gradient checks."""
-    H = weight_h.shape[1]
     h, c, out = h0, c0, []
     for t in range(x.shape[0]):
-        z = x[t] @ weight_x.t() + h @ weight_h.t() + bias
-        zi, zf, zg, zo = z.split(H, dim=1)
-        i = torch.sigmoid(zi + weight_peephole[0] * c)
-        f = torch.sigmoid(zf + weight_peephole[1] * c)
-        c = f * c + i * torch.tanh(zg)
-        o = torch.sigmoid(zo + weight_peephole[2] * c)
-        h = o * torch.tanh(c)
+        h, c = peephole_step(x[t] @ weight_x.t(), h, c, weight_h, bias, weight_peephole)
         out.append(h)
     return torch.stack(out), h, c

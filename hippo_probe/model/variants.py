@@ -24,7 +24,7 @@ labelled as a departure from the study:
     ``sum_i p_i mu_i`` (Banino et al. 2018), so its error compares with the others'.
 
 The ``nonneg`` and ``dale`` variants run the LSTM by plain autograd
-(:func:`peephole_step`), in float32, not the fused kernels of the faithful network.
+(:func:`~hippo_probe.model.lstm.peephole_step`), in float32, not the fused kernels of the faithful network.
 
 References
 ----------
@@ -45,7 +45,7 @@ import torch
 from torch import nn
 
 from .config import VARIANTS  # noqa: F401  (the names, defined without torch)
-from .lstm import PeepholeLSTM
+from .lstm import PeepholeLSTM, peephole_step
 
 #: Fraction of excitatory units under Dale's law (cortex: about 80%).
 EXCITATORY_FRACTION = 0.8
@@ -62,20 +62,20 @@ class VariantLSTM(PeepholeLSTM):
         ``h = o * relu(tanh(c))`` instead of ``o * tanh(c)``.
     dale : bool
         Sign-constrained outgoing recurrent weights (80% excitatory units).
-    seed : int
-        Seed of which units are inhibitory.
+
+    Which units are inhibitory is drawn from torch's random generator, like the initial
+    weights (so the network's ``init_seed`` sets both), and saved with the network as the
+    buffer ``sign``.
     """
 
     def __init__(self, input_size: int, hidden_size: int = 256, forget_bias: float = 1.0,
-                 *, nonneg: bool = True, dale: bool = False, seed: int = 0):
+                 *, nonneg: bool = True, dale: bool = False):
         super().__init__(input_size, hidden_size, forget_bias, precision="fp32")
         self.nonneg, self.dale = bool(nonneg), bool(dale)
         sign = torch.ones(hidden_size)
         if self.dale:
-            rng = np.random.default_rng(seed)
             n_inhibitory = hidden_size - int(round(EXCITATORY_FRACTION * hidden_size))
-            inhibitory = rng.choice(hidden_size, n_inhibitory, replace=False)
-            sign[torch.from_numpy(inhibitory)] = -1.0
+            sign[torch.randperm(hidden_size)[:n_inhibitory]] = -1.0
             with torch.no_grad():   # balanced on average: 0.8 * 1 = 0.2 * 4
                 self.weight_h.abs_()
                 self.weight_h[:, sign < 0] *= EXCITATORY_FRACTION / (1 - EXCITATORY_FRACTION)
@@ -105,20 +105,6 @@ class VariantLSTM(PeepholeLSTM):
     def extra_repr(self) -> str:
         return (f"{self.input_size}, hidden_size={self.hidden_size}, peepholes=True, "
                 f"nonneg={self.nonneg}, dale={self.dale}")
-
-
-def peephole_step(xw_t, h, c, weight_h, bias, weight_peephole, nonneg: bool):
-    """One step of the peephole LSTM (the equations of :mod:`.lstm`) given the step's
-    input projection ``x_t W_x^T``; with ``nonneg`` the output is ``o * relu(tanh(c))``."""
-    H = weight_h.shape[1]
-    z = xw_t + h @ weight_h.t() + bias
-    zi, zf, zg, zo = z.split(H, dim=1)
-    i = torch.sigmoid(zi + weight_peephole[0] * c)
-    f = torch.sigmoid(zf + weight_peephole[1] * c)
-    c = f * c + i * torch.tanh(zg)
-    o = torch.sigmoid(zo + weight_peephole[2] * c)
-    squashed = torch.tanh(c)
-    return o * (torch.relu(squashed) if nonneg else squashed), c
 
 
 class PlaceCellReadout(nn.Module):

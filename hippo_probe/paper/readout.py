@@ -8,7 +8,7 @@ steps that stop on a budget. The protocol, with its numbers in :class:`ReadoutCo
 
 1. Features. The frozen network runs on specialized-task trials (train split for the fit,
    validation split to choose the L2 strength, test split to score) in its own world;
-   its hidden units ``h_t`` are kept at the fit times (every 25 s from 100 s: "late in
+   its hidden units ``h_t`` are kept at the fit times (every 20 s from 100 s: "late in
    each trial") on training trials and every 10 s on the others. Features stream to disk
    in blocks of 1,000 trials (resumable), so memory holds one block at a time while
    extracting and one training set while fitting.
@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from .._atomic import atomic_path, write_text
+from .._validators import check_positive
 from ..analysis.decode_environment import decoder_weights, fit_linear_decoder
 
 
@@ -48,21 +49,28 @@ class ReadoutConfig:
     Attributes
     ----------
     fit_times : tuple of float
-        Times in trial (s) whose states train the readout: 100-200 s every 25 s, "late in
-        each trial" (the study trains its readout for the late part; 5 states a trial,
-        25 s apart, are far less correlated than consecutive 0.4-s steps).
+        Times in trial (s) whose states train the readout: 100-200 s every 20 s, "late in
+        each trial" (the study trains its readout for the late part; 6 states a trial,
+        20 s apart, are far less correlated than consecutive 0.4-s steps).
     curve_times : tuple of float
         Times (s) at which validation and test trials are scored: every 10 s, 10-200 s
         (the Fig. 3F curve).
     taus : tuple of float
         Time constants (s) of the leaky-average variant tried on validation trials:
-        10-100 s, from a few contacts apart to half a trial.
+        10-400 s and ``inf`` (the running mean of the trial so far), from a few contacts
+        apart to twice a trial, so that the chosen one is not at the grid's edge unless
+        it is the running mean.
     sizes : tuple of int
         Training-set sizes of the learning curve (trials of the train split).
     c_grid : tuple of float
-        Inverse L2 strengths tried, in increasing order (each fit starts from the last);
-        the path stops once validation accuracy falls. Along the learning curve a larger
-        training set starts its path at the C chosen for the smaller one.
+        Inverse L2 strengths tried at every training-set size, in increasing order (each
+        fit starts from the last); the path stops once validation accuracy falls.
+    tol : float
+        The solver's tolerance on the largest gradient component of scikit-learn's
+        objective, which is the *mean* log-loss plus ``|W|^2 / (2 C n)``: the L2 term's
+        gradient is of order ``1 / (C n)``, so the tolerance must be well below that for
+        the fits at different C to differ at all (at ``n`` = 80,000 samples and C = 10,
+        ``1 / (C n)`` is about 1e-6).
     n_validation, n_test : int
         Trials of the validation and test splits.
     max_iter : int
@@ -71,11 +79,12 @@ class ReadoutConfig:
         Trials per feature file (the trial cache's block).
     """
 
-    fit_times: tuple = (100.0, 125.0, 150.0, 175.0, 200.0)
+    fit_times: tuple = (100.0, 120.0, 140.0, 160.0, 180.0, 200.0)
     curve_times: tuple = tuple(float(t) for t in range(10, 201, 10))
-    taus: tuple = (10.0, 25.0, 50.0, 100.0)
+    taus: tuple = (10.0, 25.0, 50.0, 100.0, 200.0, 400.0, float("inf"))
     sizes: tuple = (4000, 16000, 64000)
     c_grid: tuple = (0.01, 0.1, 1.0, 10.0)
+    tol: float = 1e-8
     n_validation: int = 1000
     n_test: int = 1000
     max_iter: int = 2000
@@ -91,20 +100,27 @@ def leaky_average(h: np.ndarray, dt: float, tau: float) -> np.ndarray:
 
     ``a_t = sum_{s<=t} exp(-(t - s) dt / tau) h_s / sum_{s<=t} exp(-(t - s) dt / tau)``:
     a weighted mean of the past, so ``a_0 = h_0`` and a constant input is returned
-    unchanged (no start-up bias); ``tau -> 0`` gives ``h``, ``tau -> inf`` the running
-    mean.
+    unchanged (no start-up bias); ``tau -> 0`` gives ``h``, ``tau = inf`` the running
+    mean. Numerator and denominator are the first-order recursive filter
+    ``y_t = decay * y_{t-1} + u_t`` (:func:`scipy.signal.lfilter`), in float64.
     """
+    from scipy.signal import lfilter
+
     if not tau > 0:
         raise ValueError(f"`tau` must be > 0 s; got {tau!r}")
     decay = np.exp(-dt / tau)
-    out = np.empty(h.shape, np.float32)
-    num = np.zeros(h.shape[1:], np.float64)
-    den = 0.0
-    for t in range(h.shape[0]):
-        num = decay * num + h[t]
-        den = decay * den + 1.0
-        out[t] = num / den
-    return out
+    num = lfilter([1.0], [1.0, -decay], np.asarray(h, np.float64), axis=0)
+    den = lfilter([1.0], [1.0, -decay], np.ones(h.shape[0]))
+    return (num / den.reshape((-1,) + (1,) * (h.ndim - 1))).astype(np.float32)
+
+
+def describe_kind(kind: str) -> str:
+    """A feature kind in words, for tables and legends."""
+    if kind == "h":
+        return "units h (the study's readout)"
+    tau = kind.split("_", 1)[1]
+    return "running mean of h (variant)" if tau == "inf" else \
+        f"leaky average of h, tau {tau} s (variant)"
 
 
 def feature_kinds(cfg: ReadoutConfig = READOUT) -> tuple[str, ...]:
@@ -112,9 +128,15 @@ def feature_kinds(cfg: ReadoutConfig = READOUT) -> tuple[str, ...]:
     return ("h", *(f"leaky_{tau:g}" for tau in cfg.taus))
 
 
-def _steps(times, dt) -> np.ndarray:
+def _steps(times, dt, n_steps: int) -> np.ndarray:
     """0-based step index of each time in trial (step s ends at (s + 1) dt)."""
-    return np.rint(np.asarray(times, float) / dt).astype(int) - 1
+    times = np.asarray(times, float)
+    steps = np.rint(times / dt).astype(int) - 1
+    bad = (steps < 0) | (steps >= n_steps) | ~np.isclose((steps + 1) * dt, times)
+    if bad.any():
+        raise ValueError(f"times in trial must be multiples of dt = {dt:g} s within "
+                         f"(0, {n_steps * dt:g}] s; got {times[bad].tolist()}")
+    return steps
 
 
 def network_features(net, inputs, dt, times, cfg: ReadoutConfig = READOUT,
@@ -122,10 +144,11 @@ def network_features(net, inputs, dt, times, cfg: ReadoutConfig = READOUT,
     """Each feature kind of a frozen network at ``times``: ``{kind: (B, S, H) float32}``."""
     import torch
 
-    steps = _steps(times, dt)
+    steps = _steps(times, dt, inputs.shape[0])
     out = {k: [] for k in feature_kinds(cfg)}
     with torch.no_grad():
         for lo in range(0, inputs.shape[1], chunk):
+            # the whole trajectory of each trial (the leaky averages need every step)
             _, _, h = net(torch.from_numpy(np.ascontiguousarray(inputs[:, lo:lo + chunk])))
             h = h.numpy()
             out["h"].append(h[steps].transpose(1, 0, 2))
@@ -135,51 +158,76 @@ def network_features(net, inputs, dt, times, cfg: ReadoutConfig = READOUT,
     return {k: np.concatenate(v).astype(np.float32) for k, v in out.items()}
 
 
-def _block_path(folder, name, split, block) -> Path:
-    return Path(folder) / name / split / f"block_{block:05d}.npz"
+def _block_path(folder, key, split, block) -> Path:
+    return Path(folder) / key / split / f"block_{block:05d}.npz"
+
+
+def feature_key(name: str, net, world: str, cfg: ReadoutConfig = READOUT) -> str:
+    """The cache folder of a network's features: ``<name>-<digest>``.
+
+    The digest covers everything the stored numbers depend on (the network's parameters,
+    the world, the times, the time constants and the block size), so a retrained network
+    or another protocol never reads features of the old one.
+    """
+    import hashlib
+
+    digest = hashlib.sha256()
+    for k, v in sorted(net.state_dict().items()):
+        digest.update(k.encode())
+        digest.update(np.ascontiguousarray(v.detach().cpu().float().numpy()).tobytes())
+    protocol = {"world": world, "fit_times": list(cfg.fit_times),
+                "curve_times": list(cfg.curve_times), "taus": [str(t) for t in cfg.taus],
+                "block": cfg.block}
+    digest.update(json.dumps(protocol, sort_keys=True).encode())
+    return f"{name}-{digest.hexdigest()[:12]}"
 
 
 def extract_features(nets: dict, split: str, n_trials: int, folder, *, world: str,
-                     cfg: ReadoutConfig = READOUT, progress: bool = True) -> None:
+                     cfg: ReadoutConfig = READOUT, progress: bool = True) -> dict:
     """Write the features of every network in ``nets`` on the first ``n_trials``
-    specialized-task trials of ``split`` (world ``world``) under ``folder``.
+    specialized-task trials of ``split`` (world ``world``) under ``folder``; return
+    ``{name: key}``, the cache folder of each (:func:`feature_key`).
 
     One file per network and block of ``cfg.block`` trials, written atomically and
     skipped when present: an interrupted extraction resumes where it stopped, and the
-    trials of a block are simulated once for all networks.
+    trials of a block are simulated once for all networks. Blocks are always whole (the
+    last may hold trials beyond ``n_trials``), so a later, larger request reuses them.
     """
     from tqdm.auto import tqdm
 
     from ..tasks import make_trials
 
+    check_positive("n_trials", n_trials, integer=True)
+    keys = {name: feature_key(name, net, world, cfg) for name, net in nets.items()}
     times = cfg.fit_times if split == "train" else cfg.curve_times
     n_blocks = -(-n_trials // cfg.block)
     for block in tqdm(range(n_blocks), desc=f"features {split}", unit="block",
                       disable=not progress):
         todo = {name: net for name, net in nets.items()
-                if not _block_path(folder, name, split, block).exists()}
+                if not _block_path(folder, keys[name], split, block).exists()}
         if not todo:
             continue
-        lo = block * cfg.block
-        batch = make_trials("specialized", min(cfg.block, n_trials - lo), split, 0,
-                            first=lo, world=world)
+        batch = make_trials("specialized", cfg.block, split, 0, first=block * cfg.block,
+                            world=world)
         for name, net in todo.items():
             feats = network_features(net, batch.inputs, batch.dt, times, cfg)
-            with atomic_path(_block_path(folder, name, split, block), overwrite=True,
-                             what="features") as tmp:
+            with atomic_path(_block_path(folder, keys[name], split, block),
+                             overwrite=True, what="features") as tmp:
                 with open(tmp, "wb") as f:
                     np.savez(f, environment=batch.environment.astype(np.int16),
                              times=np.asarray(times), **feats)
+    return keys
 
 
-def load_features(folder, name: str, split: str, n_trials: int, kind: str,
+def load_features(folder, key: str, split: str, n_trials: int, kind: str,
                   cfg: ReadoutConfig = READOUT) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(x (n_trials, S, H), labels (n_trials,), times (S,)) of one feature kind."""
+    """(x (n_trials, S, H), labels (n_trials,), times (S,)) of one feature kind of the
+    network whose cache folder is ``key`` (:func:`extract_features`)."""
     xs, ys, times = [], [], None
     for block in range(-(-n_trials // cfg.block)):
-        path = _block_path(folder, name, split, block)
+        path = _block_path(folder, key, split, block)
         if not path.exists():
-            raise FileNotFoundError(f"features of {name!r} on {split} trials, block "
+            raise FileNotFoundError(f"features of {key!r} on {split} trials, block "
                                     f"{block}, are missing ({path}); extract them first")
         with np.load(path, allow_pickle=False) as f:
             xs.append(f[kind])
@@ -197,19 +245,22 @@ def accuracy_by_time(decoder, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return (pred == y[:, None]).mean(axis=0)
 
 
-def fit_path(x_train, y_train, x_val, y_val, val_times, cfg: ReadoutConfig = READOUT,
-             start_c=None):
-    """Fit along ``cfg.c_grid`` (from ``start_c`` on, if given); return (best decoder, its
-    C, [(C, val acc, n_iter, converged)]). Validation accuracy is the mean over the
-    validation times within the fit times' range (late in the trial)."""
+def fit_path(x_train, y_train, x_val, y_val, val_times, cfg: ReadoutConfig = READOUT):
+    """Fit along ``cfg.c_grid``; return (best decoder, its C, [path entries]).
+
+    Each entry records C, the validation accuracy (the mean over the validation times
+    within the fit times' range, late in the trial), the solver's iterations and whether
+    it converged. The path runs in increasing C, each fit warm-started from the last (the
+    same optimum, fewer iterations), and stops once validation accuracy falls.
+    """
     late = np.asarray(val_times) >= min(cfg.fit_times)
     n, s, h = x_train.shape
     x = x_train.reshape(n * s, h)
     y = np.repeat(y_train, s)
-    grid = [c for c in cfg.c_grid if start_c is None or c >= start_c]
     best, best_c, best_acc, path, prev = None, None, -1.0, [], None
-    for c in grid:
-        model = fit_linear_decoder(x, y, c=c, max_iter=cfg.max_iter, warm_from=prev)
+    for c in sorted(cfg.c_grid):
+        model = fit_linear_decoder(x, y, c=c, max_iter=cfg.max_iter, tol=cfg.tol,
+                                   warm_from=prev)
         acc = float(accuracy_by_time(model, x_val, y_val)[late].mean())
         path.append({"c": c, "validation_accuracy": acc, "n_iter": model.n_iter,
                      "converged": bool(model.converged)})
@@ -221,28 +272,28 @@ def fit_path(x_train, y_train, x_val, y_val, val_times, cfg: ReadoutConfig = REA
     return best, best_c, path
 
 
-def learning_curve(folder, name: str, kinds, cfg: ReadoutConfig = READOUT,
-                   sizes=None, progress: bool = True, start_c=None) -> dict:
+def learning_curve(folder, key: str, kinds, cfg: ReadoutConfig = READOUT,
+                   sizes=None, progress: bool = True) -> dict:
     """The readout fitted at each training-set size for each feature kind.
 
-    Returns a JSON-able dict: per kind and size, the L2 path on validation trials, the
-    chosen C, test accuracy at every curve time, and the fitted decoder of the largest
-    size (under ``"decoders"``, not JSON-able; popped by the caller).
+    ``key`` is the network's cache folder (:func:`extract_features`). Returns a JSON-able
+    dict: per kind and size, the L2 path on validation trials, the chosen C, test
+    accuracy at every curve time, and the fitted decoder of the largest size (under
+    ``"decoders"``, not JSON-able; popped by the caller).
     """
-    sizes = tuple(cfg.sizes if sizes is None else sizes)
-    out = {"sizes": list(sizes), "kinds": {}, "decoders": {}}
+    sizes = sorted(set(cfg.sizes if sizes is None else sizes))
+    for n in sizes:
+        check_positive("sizes", n, integer=True)
+    out = {"sizes": sizes, "kinds": {}, "decoders": {}}
     for kind in kinds:
-        x_val, y_val, val_times = load_features(folder, name, "validation",
+        x_val, y_val, val_times = load_features(folder, key, "validation",
                                                 cfg.n_validation, kind, cfg)
-        x_test, y_test, test_times = load_features(folder, name, "test", cfg.n_test,
+        x_test, y_test, test_times = load_features(folder, key, "test", cfg.n_test,
                                                    kind, cfg)
-        rows, c = [], start_c
+        rows = []
         for n in sizes:
-            x_tr, y_tr, _ = load_features(folder, name, "train", n, kind, cfg)
-            # more data needs less regularization: the best C of a larger training set is
-            # not below that of a smaller one, so its path starts there
-            decoder, c, path = fit_path(x_tr, y_tr, x_val, y_val, val_times, cfg,
-                                        start_c=c)
+            x_tr, y_tr, _ = load_features(folder, key, "train", n, kind, cfg)
+            decoder, c, path = fit_path(x_tr, y_tr, x_val, y_val, val_times, cfg)
             del x_tr
             acc = accuracy_by_time(decoder, x_test, y_test)
             rows.append({"train_trials": n, "c": c, "path": path,
@@ -251,7 +302,7 @@ def learning_curve(folder, name: str, kinds, cfg: ReadoutConfig = READOUT,
                                                          for p in path)})
             out["decoders"][kind] = decoder
             if progress:
-                print(f"{name} {kind} {n} trials: C={c:g}, test accuracy at "
+                print(f"{key} {kind} {n} trials: C={c:g}, test accuracy at "
                       f"{test_times[-1]:g} s {acc[-1]:.3f}", flush=True)
         out["kinds"][kind] = {"rows": rows, "times": test_times.tolist()}
     return out
@@ -262,9 +313,9 @@ def readout_network(base_file, decoder, *, description: dict) -> dict:
     weights (standardization folded in) as its arena classifier."""
     import torch
 
-    from ..training.checkpoint import load
-
+    from ..pretrained import checkpoint_world
     from ..tasks import task_config
+    from ..training.checkpoint import load
 
     base = load(base_file)
     w, b = decoder_weights(decoder)
@@ -283,7 +334,7 @@ def readout_network(base_file, decoder, *, description: dict) -> dict:
     state["classifier.bias"] = torch.from_numpy(bias)
     model_config = dict(base["model_config"], n_classes=n_classes)
     return {"model": state, "model_config": model_config, "task": "specialized",
-            "world": base["world"], "config": description, "class_weight": None,
+            "world": checkpoint_world(base), "config": description, "class_weight": None,
             "test": None, "steps_done": None, "finished": True,
             "base_network": {"file": Path(base_file).name,
                              "steps_done": base.get("steps_done"),
@@ -292,8 +343,6 @@ def readout_network(base_file, decoder, *, description: dict) -> dict:
 
 def write_json(path, obj) -> None:
     write_text(Path(path), json.dumps(obj, indent=1), what="out")
-
-
 
 
 def readout_table(results: list) -> str:
@@ -307,8 +356,7 @@ def readout_table(results: list) -> str:
         for kind, v in res["kinds"].items():
             times = v["times"]
             i100, i200 = times.index(100.0), times.index(200.0)
-            what = "units h (the study's)" if kind == "h" else \
-                f"leaky average, tau {kind.split('_', 1)[1]} s" + (" *" if kind == chosen else "")
+            what = describe_kind(kind) + (" *" if kind == chosen else "")
             for row in v["rows"]:
                 acc = row["test_accuracy"]
                 lines.append(f"| {res['network']} | {what} | {row['train_trials']:,} | "
@@ -331,14 +379,14 @@ def plot_readout(results: list, *, study: float = 0.85, chance: float = 0.01):
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for k, res in enumerate(results):
         color = colors[k % len(colors)]
-        kinds = [("h", "-", "units h (the study's readout)")]
+        kinds = [("h", "-")]
         leaky = (res.get("leaky_tau_choice") or {}).get("chosen")
         if leaky:
-            tau = leaky.split("_", 1)[1]
-            kinds.append((leaky, "--", f"leaky average, tau {tau} s (variant)"))
-        for kind, style, what in kinds:
+            kinds.append((leaky, "--"))
+        for kind, style in kinds:
             if kind not in res["kinds"]:
                 continue
+            what = describe_kind(kind)
             rows = res["kinds"][kind]["rows"]
             times = res["kinds"][kind]["times"]
             ax_t.plot(times, rows[-1]["test_accuracy"], style, color=color,

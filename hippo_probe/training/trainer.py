@@ -19,6 +19,7 @@ import sys
 import time
 import warnings
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import torch
@@ -38,15 +39,32 @@ from .data import TrainingTrials
 from .memory import reuse_freed_memory
 
 
-def class_weight_rule(target_var: float, n_classes: int) -> float:
-    """lambda such that the weighted cross-entropy is half the squared error at chance.
+def class_weight_rule(position_cost: float, n_classes: int) -> float:
+    """lambda such that the weighted cross-entropy is half the position cost at chance.
 
     At chance (predicting the mean position, 0, and a uniform class posterior) the squared
-    error is the target's mean square ``target_var`` and the cross-entropy ``ln C``; so
-    ``lambda = 0.5 * target_var / ln C`` makes ``lambda * CE`` about half of the
-    localization cost, the balance prescribed by the project's design.
+    error is the target's mean square and the cross-entropy ``ln C``; so ``lambda = 0.5 *
+    position_cost / ln C`` makes ``lambda * CE`` about half of the localization cost, the
+    balance prescribed by the project's design. ``position_cost`` is what
+    :func:`_position_cost_at_chance` returns for the network's position output.
     """
-    return 0.5 * target_var / math.log(n_classes)
+    return 0.5 * position_cost / math.log(n_classes)
+
+
+def _position_cost_at_chance(net, target) -> float:
+    """The position term's excess over its minimum at chance, on targets (T, B, 2).
+
+    The (x, y) readout's squared error at the mean position 0 is the targets' mean square;
+    the place-cell output's cross-entropy at a uniform population is ``ln n``, of which
+    the targets' own entropy ``H(q)`` is out of reach: its excess is ``ln n - H(q)``.
+    """
+    target = np.asarray(target, np.float32)
+    if net.config.variant != "placecells":
+        return float(np.mean(target ** 2))
+    with torch.no_grad():
+        q = net.position.targets(torch.from_numpy(target))
+        entropy = -(q * torch.log(q.clamp_min(1e-30))).sum(-1).mean()
+    return float(math.log(q.shape[-1]) - entropy)
 
 
 def build_network(config: TrainConfig) -> Navigator:
@@ -111,13 +129,24 @@ def _sha1(path) -> str:
     return hashlib.sha1(Path(path).read_bytes()).hexdigest()
 
 
-def losses(net, inputs, target, environment, class_weight, *, classifier_only=False,
-           classify=True, activity_l1=0.0):
-    """(total, mse, ce, xy, logits) on one batch of numpy arrays.
+class Losses(NamedTuple):
+    """The terms of one batch's objective, and the network's outputs."""
 
-    ``total = position term + class_weight * ce + activity_l1 * mean |h|``; the position
-    term is the squared error of the (x, y) readout (the place cells' cross-entropy for
-    that variant), ``mse`` always that of the decoded position.
+    total: torch.Tensor        # what is minimized
+    mse: torch.Tensor          # squared error of the decoded position
+    ce: torch.Tensor           # arena cross-entropy (0 when not classifying)
+    position: torch.Tensor     # the position term trained on
+    xy: torch.Tensor
+    logits: torch.Tensor | None
+
+
+def losses(net, inputs, target, environment, class_weight, *, classifier_only=False,
+           classify=True, activity_l1=0.0) -> Losses:
+    """The objective's terms on one batch of numpy arrays.
+
+    ``total = position + class_weight * ce + activity_l1 * mean |h|``; the position term
+    is the squared error of the (x, y) readout (the place cells' cross-entropy for that
+    variant), ``mse`` always that of the decoded position.
     """
     xy, logits, h = net(torch.from_numpy(inputs))
     target = torch.from_numpy(np.asarray(target, dtype=np.float32)).to(xy.device)
@@ -135,7 +164,7 @@ def losses(net, inputs, target, environment, class_weight, *, classifier_only=Fa
     total = class_weight * ce if classifier_only else position_term + class_weight * ce
     if activity_l1 and not classifier_only:
         total = total + activity_l1 * h.abs().mean()
-    return total, mse, ce, xy, logits
+    return Losses(total, mse, ce, position_term, xy, logits)
 
 
 @torch.no_grad()
@@ -156,17 +185,18 @@ def evaluate_network(net, batch, class_weight: float = 0.0, chunk: int = 250, *,
     net.eval()
     err_sum = np.zeros(batch.n_steps)
     acc_sum = np.zeros(batch.n_steps)
-    mse_sum = ce_sum = 0.0
+    mse_sum = ce_sum = position_sum = 0.0
     bar = tqdm(total=len(batch), desc=f"evaluate {batch.task}", unit="trial",
                disable=not progress)
     for lo in range(0, len(batch), chunk):
         sl = slice(lo, lo + chunk)
-        _, mse, ce, xy, logits = losses(net, batch.inputs[:, sl], target[:, sl],
-                                        batch.environment[sl], class_weight,
-                                        classify=classify)
+        _, mse, ce, position, xy, logits = losses(net, batch.inputs[:, sl], target[:, sl],
+                                                  batch.environment[sl], class_weight,
+                                                  classify=classify)
         n = xy.shape[1]
         mse_sum += float(mse) * n
         ce_sum += float(ce) * n
+        position_sum += float(position) * n
         truth = torch.from_numpy(np.asarray(target[:, sl], dtype=np.float32))
         err = torch.linalg.norm(xy.cpu() - truth, dim=-1)
         err_sum += err.sum(1).numpy()
@@ -179,7 +209,9 @@ def evaluate_network(net, batch, class_weight: float = 0.0, chunk: int = 250, *,
     n = len(batch)
     out = {"error_m": err_sum / n, "mean_error_m": float(err_sum.sum() / n / batch.n_steps),
            "mse": mse_sum / n, "ce": ce_sum / n,
-           "loss": mse_sum / n + class_weight * ce_sum / n}
+           # the trained objective less its activity cost: for the place-cell output its
+           # cross-entropy, for the others the squared error
+           "loss": position_sum / n + class_weight * ce_sum / n}
     if classify:
         out["accuracy"] = acc_sum / n
         out["mean_accuracy"] = float(acc_sum.sum() / n / batch.n_steps)
@@ -387,10 +419,10 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
     elif config.class_weight is not None:
         class_weight = config.class_weight
     elif classify:
-        target_var = make_trials(config.task, config.n_validation, "validation",
-                                 config.seed, world=config.world).target if validation is None else \
+        target = make_trials(config.task, config.n_validation, "validation",
+                             config.seed, world=config.world).target if validation is None else \
             validation.target
-        class_weight = class_weight_rule(float(np.mean(target_var ** 2)),
+        class_weight = class_weight_rule(_position_cost_at_chance(net, target),
                                          net.config.n_classes)
     else:
         class_weight = 0.0
@@ -495,9 +527,9 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
             inputs, target, env = data.batch(idx)
             for group in opt.param_groups:
                 group["lr"] = _lr_at(config, step)
-            total, mse, ce, _, _ = losses(train_net, inputs, target, env, class_weight,
-                                          classifier_only=classifier_only,
-                                          activity_l1=config.activity_l1)
+            total, mse, ce, *_ = losses(train_net, inputs, target, env, class_weight,
+                                        classifier_only=classifier_only,
+                                        activity_l1=config.activity_l1)
             opt.zero_grad(set_to_none=True)
             total.backward()
             grad_norm = torch.nn.utils.clip_grad_norm_(params, config.clip_norm)

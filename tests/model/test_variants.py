@@ -76,3 +76,35 @@ def test_a_variant_trains_saves_and_records_under_its_name(tmp_path):
                       VariantLSTM)
     with pytest.raises(ValueError, match="`variant` must be one of"):
         TrainConfig(variant="grid")
+
+
+def test_the_dale_mask_follows_the_networks_init_seed():
+    masks = []
+    for seed in (0, 0, 1):
+        torch.manual_seed(seed)
+        masks.append(VariantLSTM(9, 64, dale=True).sign.clone())
+    assert torch.equal(masks[0], masks[1]) and not torch.equal(masks[0], masks[2])
+    assert all((m < 0).sum() == round(0.2 * 64) for m in masks)
+
+
+def test_the_place_cell_outputs_validation_loss_is_its_training_objective():
+    from hippo_probe.tasks import make_trials
+    from hippo_probe.training.trainer import (_position_cost_at_chance, evaluate_network,
+                                              losses)
+
+    net = _net("placecells")
+    batch = make_trials("generalized", 3, "validation", 0)
+    m = evaluate_network(net, batch)
+    with torch.no_grad():
+        terms = losses(net, batch.inputs, batch.target, batch.environment, 0.0)
+    # what the best network is chosen by is the cross-entropy trained on, not the
+    # decoded position's squared error
+    assert m["loss"] == pytest.approx(float(terms.position), rel=1e-5)
+    assert m["mse"] == pytest.approx(float(terms.mse), rel=1e-5)
+    assert m["loss"] != pytest.approx(m["mse"], rel=0.1)
+    # at chance the cross-entropy's reachable part is ln n - H(q), between 0 and ln n
+    cost = _position_cost_at_chance(net, batch.target)
+    assert 0 < cost < np.log(net.config.n_place_cells)
+    faithful = _net("faithful")
+    assert _position_cost_at_chance(faithful, batch.target) == pytest.approx(
+        float(np.mean(batch.target.astype(np.float32) ** 2)), rel=1e-6)

@@ -55,6 +55,8 @@ def test_the_leaky_average_is_a_normalized_exponential_mean():
     np.testing.assert_allclose(a[0], h[0])
     const = np.full((10, 1, 1), 0.3, np.float32)
     np.testing.assert_allclose(R.leaky_average(const, 0.4, 50.0), const, rtol=1e-6)
+    running = R.leaky_average(h, 0.4, np.inf)
+    np.testing.assert_allclose(running[t], h[:t + 1].mean(0), rtol=1e-5)
     with pytest.raises(ValueError, match="`tau` must be > 0"):
         R.leaky_average(h, 0.4, 0.0)
 
@@ -71,27 +73,61 @@ def tiny(tmp_path_factory):
                   c_grid=(0.1, 1.0), taus=(10.0,), curve_times=(40.0, 100.0, 200.0))
     folder = tmp_path_factory.mktemp("features")
     for split, n in (("validation", 20), ("test", 20), ("train", 40)):
-        R.extract_features({"tiny": net}, split, n, folder, world="darkness", cfg=cfg,
-                           progress=False)
-    return net, cfg, folder
+        keys = R.extract_features({"tiny": net}, split, n, folder, world="darkness",
+                                  cfg=cfg, progress=False)
+    return net, cfg, folder, keys["tiny"]
 
 
 def test_features_are_stored_by_block_and_not_recomputed(tiny):
-    net, cfg, folder = tiny
-    x, y, times = R.load_features(folder, "tiny", "train", 40, "h", cfg)
+    net, cfg, folder, key = tiny
+    x, y, times = R.load_features(folder, key, "train", 40, "h", cfg)
     assert x.shape == (40, len(cfg.fit_times), 8) and y.shape == (40,)
     assert list(times) == list(cfg.fit_times) and y.max() < 100
-    stamp = (folder / "tiny" / "train" / "block_00001.npz").stat().st_mtime_ns
+    stamp = (folder / key / "train" / "block_00001.npz").stat().st_mtime_ns
     R.extract_features({"tiny": net}, "train", 40, folder, world="darkness", cfg=cfg,
                        progress=False)
-    assert (folder / "tiny" / "train" / "block_00001.npz").stat().st_mtime_ns == stamp
+    assert (folder / key / "train" / "block_00001.npz").stat().st_mtime_ns == stamp
     with pytest.raises(FileNotFoundError, match="extract them first"):
-        R.load_features(folder, "tiny", "train", 60, "h", cfg)
+        R.load_features(folder, key, "train", 60, "h", cfg)
+
+
+def test_a_partial_request_still_stores_whole_blocks(tiny, tmp_path):
+    net, cfg, _, key = tiny
+    R.extract_features({"tiny": net}, "train", 25, tmp_path, world="darkness", cfg=cfg,
+                       progress=False)
+    x, _, _ = R.load_features(tmp_path, key, "train", 25, "h", cfg)
+    assert x.shape[0] == 25
+    # the second block holds all its 20 trials, so 40 trials need nothing new
+    whole, _, _ = R.load_features(tmp_path, key, "train", 40, "h", cfg)
+    ref, _, _ = R.load_features(tiny[2], key, "train", 40, "h", cfg)
+    np.testing.assert_array_equal(whole, ref)
+
+
+def test_the_cache_key_changes_with_the_network_and_the_protocol(tiny):
+    import torch
+
+    net, cfg, _, key = tiny
+    assert R.feature_key("tiny", net, "darkness", cfg) == key
+    assert R.feature_key("tiny", net, "compass", cfg) != key
+    assert R.feature_key("tiny", net, "darkness", replace(cfg, taus=(20.0,))) != key
+    other = type(net)(net.config)
+    with torch.no_grad():
+        other.load_state_dict(net.state_dict())
+        other.position.bias.add_(1e-3)
+    assert R.feature_key("tiny", other, "darkness", cfg) != key
+
+
+def test_times_off_the_step_grid_are_refused():
+    with pytest.raises(ValueError, match="multiples of dt"):
+        R._steps([10.0, 10.3], 0.4, 500)
+    with pytest.raises(ValueError, match="within"):
+        R._steps([400.0], 0.4, 500)
+    assert list(R._steps([0.4, 200.0], 0.4, 500)) == [0, 499]
 
 
 def test_the_learning_curve_on_a_tiny_recording(tiny):
-    _, cfg, folder = tiny
-    res = R.learning_curve(folder, "tiny", ["h", "leaky_10"], cfg, progress=False)
+    _, cfg, folder, key = tiny
+    res = R.learning_curve(folder, key, ["h", "leaky_10"], cfg, progress=False)
     assert set(res["decoders"]) == {"h", "leaky_10"}
     for kind in ("h", "leaky_10"):
         rows = res["kinds"][kind]["rows"]
@@ -110,15 +146,15 @@ def test_the_exported_readout_gives_the_decoders_logits(tiny, tmp_path):
     from hippo_probe.training.trainer import save_network
     from hippo_probe.training import TrainConfig
 
-    net, cfg, folder = tiny
+    net, cfg, folder, key = tiny
     base = tmp_path / "base.pt"
     save_network(net, TrainConfig(task="generalized", hidden_size=8), {}, base)
-    res = R.learning_curve(folder, "tiny", ["h"], cfg, progress=False)
+    res = R.learning_curve(folder, key, ["h"], cfg, progress=False)
     dec = res["decoders"]["h"]
     save_atomic(R.readout_network(base, dec, description={"readout": "convex"}),
                 tmp_path / "readout.pt")
     out = hp.load_pretrained(tmp_path / "readout.pt")
-    x, _, _ = R.load_features(folder, "tiny", "test", 20, "h", cfg)
+    x, _, _ = R.load_features(folder, key, "test", 20, "h", cfg)
     flat = x.reshape(-1, 8)
     with torch.no_grad():
         logits = out.classifier(torch.from_numpy(flat)).numpy()
@@ -133,8 +169,8 @@ def test_the_readout_figure_draws_the_curve_and_the_learning_curve(tiny):
     import matplotlib
 
     matplotlib.use("Agg")
-    _, cfg, folder = tiny
-    res = R.learning_curve(folder, "tiny", ["h", "leaky_10"], cfg, progress=False)
+    _, cfg, folder, key = tiny
+    res = R.learning_curve(folder, key, ["h", "leaky_10"], cfg, progress=False)
     res.pop("decoders")
     res.update(network="tiny", leaky_tau_choice={"chosen": "leaky_10"})
     fig = R.plot_readout([res])

@@ -80,6 +80,17 @@ def tracks_minimum(rec) -> bool:
     return rec.attrs.get("activity_kind") not in CONVENTIONS.nonnegative_kinds
 
 
+def map_rate_offset(rec, maps) -> tuple[np.ndarray, str]:
+    """Per-unit offset that makes rate maps of :func:`~.ratemaps.ratemaps` non-negative,
+    and why: :func:`nonnegative_offset` with the recording's minimum (the maps'
+    ``activity_min``) or, where it was not tracked, each map's own minimum."""
+    kind_rec = rec if rec is not None else xr.Dataset(attrs=maps.attrs)
+    amin = maps["activity_min"].values if "activity_min" in maps.coords else \
+        np.full(maps.sizes["unit"], np.nan)
+    floor = maps.min([d for d in maps.dims if d != "unit"], skipna=True).values
+    return nonnegative_offset(kind_rec, amin, floor)
+
+
 def nonnegative_offset(rec, amin, floor=None) -> tuple[np.ndarray, str]:
     """Per-unit offset subtracted to make activity a non-negative rate, and why.
 

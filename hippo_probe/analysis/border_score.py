@@ -407,7 +407,7 @@ def border_score(rec_or_maps, *, walls=None, n_shuffles=None, seed=None, percent
                          merge_angle=np.radians(BORDER.merge_angle),
                          min_wall_bins=BORDER.min_wall_bins)
     min_bins = _field_bins(size, min_area, BORDER.min_bins)
-    offset, why_offset = rate_offset(rec, maps)
+    offset, why_offset = _common.map_rate_offset(rec, maps)
     kw = dict(threshold=field_threshold, min_bins=min_bins)
     stats = stack_border_stats(maps.values, offset, geo, **kw)
     shuffled = None
@@ -418,15 +418,6 @@ def border_score(rec_or_maps, *, walls=None, n_shuffles=None, seed=None, percent
         n_shuffles=n_shuffles, seed=seed, field_threshold=field_threshold, min_area=min_area,
         min_field_bins=min_bins, search_width=search_width, merge_angle=BORDER.merge_angle,
         min_wall_bins=BORDER.min_wall_bins, rate_offset=why_offset))
-
-
-def rate_offset(rec, maps):
-    """Per-unit offset that makes the maps' rates non-negative (library convention)."""
-    kind_rec = rec if rec is not None else xr.Dataset(attrs=maps.attrs)
-    amin = maps["activity_min"].values if "activity_min" in maps.coords else \
-        np.full(maps.sizes["unit"], np.nan)
-    floor = maps.min([d for d in maps.dims if d != "unit"], skipna=True).values
-    return _common.nonnegative_offset(kind_rec, amin, floor)
 
 
 def stack_border_stats(values, offset, geo, **kw):

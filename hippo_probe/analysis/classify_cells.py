@@ -11,7 +11,7 @@ from .._validators import check_option
 from . import _common
 from ._common import AnalysisWarning
 from ._shuffles import MapStack, summarize
-from .border_score import _field_bins, _resolve_walls, rate_offset, stack_border_stats
+from .border_score import _field_bins, _resolve_walls, stack_border_stats
 from .config import (BORDER, CELL_CLASS, CONJUNCTIVE, CONVENTIONS, GRID, PLACE_FIELD, SPEED,
                      CellClassConfig)
 from .conjunctive_tuning import conjunctive_arrays
@@ -189,7 +189,7 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     geo = _resolve_walls(walls, maps, lead, x, y, size, search_width=BORDER.search_width,
                          merge_angle=np.radians(BORDER.merge_angle),
                          min_wall_bins=BORDER.min_wall_bins)
-    offset, why_offset = rate_offset(rec, maps)
+    offset, why_offset = _common.map_rate_offset(rec, maps)
     border_kw = dict(threshold=BORDER.threshold,
                      min_bins=_field_bins(size, BORDER.min_area, BORDER.min_bins))
     grid_kw = _grid_kwargs(None, None)

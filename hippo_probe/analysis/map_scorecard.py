@@ -35,14 +35,17 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
     :func:`ratemaps`, ``by="environment"``; a signed activity such as the LSTM's ``h`` is
     shifted by each unit's minimum over the recording to a non-negative rate):
 
-    - ``fraction_place_like``: units with 1 to ``config.max_fields`` fields
-      (:func:`place_fields`) whose fields cover at most ``config.max_field_fraction`` of
-      the visited area (a smooth gradient's single "field" covers most of it);
+    - ``fraction_place_like``: of the units active in an environment (not silent, below),
+      those with 1 to ``config.max_fields`` fields (:func:`place_fields`) whose fields
+      cover at most ``config.max_field_fraction`` of the visited area (a smooth
+      gradient's single "field" covers most of it);
     - ``median_field_area`` (m^2) of those units' fields;
     - ``within_map_correlation``: median over units of the split-half stability of each
       unit's map (:func:`place_field_stability`);
     - ``across_map_correlation``: median over units and environment pairs of the
-      correlation of a unit's maps in two environments (bins visited in both);
+      correlation of a unit's maps in two environments (bins visited in both); a unit
+      silent in one environment and active in the other counts as 0 (it remapped), one
+      silent in both is left out;
     - ``population_vector_correlation``: mean over bins visited in both environments of
       the correlation between the population vectors (each unit's mean over the bins
       removed, so a change of mean rates alone does not count as remapping);
@@ -87,9 +90,8 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
     opts = dict(bin_size=bin_size, sigma=sigma, min_speed=min_speed)
     maps = ratemaps(rec, by="environment", **opts)
     values = np.asarray(maps.transpose("unit", "environment", ...).values, float)
-    if _common.tracks_minimum(rec):
-        floor = np.nanmin(values.reshape(values.shape[0], -1), axis=1)
-        values = values - floor[:, None, None, None]
+    offset, why_offset = _common.map_rate_offset(rec, maps)
+    values = values - offset[:, None, None, None]
     n_units = values.shape[0]
     flat = values.reshape(n_units, len(envs), -1)
 
@@ -105,12 +107,20 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
         place_like = ((n_fields >= 1) & (n_fields <= cfg.max_fields)
                       & (covered <= cfg.max_field_fraction * visited))
     field_areas = area[place_like] if place_like.any() else np.array([np.nan])
+    peak = np.nanmax(flat, axis=-1)                                  # (unit, env)
+    silent = peak < cfg.silent_fraction * np.nanmedian(peak, axis=0, keepdims=True)
 
     within = place_field_stability(rec, **opts)["stability"].values
     pairs = [(i, j) for i in range(len(envs)) for j in range(i + 1, len(envs))]
-    # each unit's maps in two environments, over the bins visited in both
-    across = np.concatenate([pearson_masked(flat[:, i], flat[:, j], cfg.min_bins)[0]
-                             for i, j in pairs])
+    across = []
+    for i, j in pairs:
+        # each unit's maps in two environments, over the bins visited in both; a unit
+        # active in one and silent in the other has remapped (correlation 0, where
+        # Pearson's is undefined or noise), one silent in both says nothing (NaN)
+        r = pearson_masked(flat[:, i], flat[:, j], cfg.min_bins)[0]
+        r = np.where(silent[:, i] != silent[:, j], 0.0, r)
+        across.append(np.where(silent[:, i] & silent[:, j], np.nan, r))
+    across = np.concatenate(across)
     pv = []
     for i, j in pairs:
         both = np.isfinite(flat[:, i]).all(0) & np.isfinite(flat[:, j]).all(0)
@@ -121,8 +131,6 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
         pv.append(pearson_masked(a.T, b.T, 2)[0])
     pv = np.concatenate(pv) if pv else np.array([])
 
-    peak = np.nanmax(flat, axis=-1)                                  # (unit, env)
-    silent = peak < cfg.silent_fraction * np.nanmedian(peak, axis=0, keepdims=True)
     lifetime = treves_rolls(flat, axis=-1)                           # (unit, env)
     population = treves_rolls(flat, axis=0)                          # (env, bins)
 
@@ -131,8 +139,9 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
         return float(np.nanmedian(x)) if np.isfinite(x).any() else np.nan
 
     scalars = {
-        "fraction_place_like": (float(place_like.mean()), "1",
-                                f"units with 1-{cfg.max_fields} compact fields"),
+        "fraction_place_like": (float(place_like[~silent].mean()) if (~silent).any()
+                                else np.nan, "1",
+                                f"active units with 1-{cfg.max_fields} compact fields"),
         "median_field_area": (med(field_areas), "m^2", "median area of their fields"),
         "within_map_correlation": (med(within), "1",
                                    "median split-half map correlation, same environment"),
@@ -162,5 +171,5 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
                    f"fields covering <= {cfg.max_field_fraction:g} of the visited area)",
         remapping_rule=f"across_map_correlation < {cfg.global_across} and "
                        f"within_map_correlation > {cfg.global_within}",
-        **{k: ("None" if v is None else v) for k, v in opts.items()})
+        rate_offset=why_offset, **{k: ("None" if v is None else v) for k, v in opts.items()})
     return out

@@ -54,3 +54,28 @@ def test_one_environment_is_refused():
     rec = _population("place").pipe(lambda r: hp.select_trials(r, environments=[0]))
     with pytest.raises(ValueError, match="at least 2 environments"):
         hp.map_scorecard(rec, bin_size=0.05)
+
+
+def test_a_unit_silenced_in_one_arena_counts_as_remapped_and_not_as_a_place_cell():
+    rec = _population("gradient")
+    # half the units fall silent in environment 1: their maps share nothing across
+    # arenas, so they lower the across-arena median instead of dropping out of it
+    rate = rec.activity.values.copy()
+    rate[np.ix_(rec.environment.values == 1, np.arange(12))] = 0.0
+    quiet = rec.assign(activity=(rec.activity.dims, rate, rec.activity.attrs))
+    card = hp.map_scorecard(quiet, bin_size=0.05)
+    full = hp.map_scorecard(rec, bin_size=0.05)
+    assert float(card.fraction_silent) == pytest.approx(12 / 48)
+    assert card.across_map_correlation < full.across_map_correlation
+    # of 36 active unit-arena pairs none is a place cell; a silent unit is not counted
+    assert float(card.fraction_place_like) == pytest.approx(float(full.fraction_place_like),
+                                                         abs=0.05)
+
+
+def test_a_signed_activity_is_offset_by_its_recording_minimum():
+    rec = _population("place")
+    signed = rec.assign(activity=rec.activity - 5.0)
+    signed.attrs["activity_kind"] = "lstm_hidden"
+    card = hp.map_scorecard(signed, bin_size=0.05)
+    assert "minimum over the recording" in card.attrs["rate_offset"]
+    assert card.attrs["place_fields"] and card.attrs["global_remapping"]

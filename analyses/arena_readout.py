@@ -31,7 +31,7 @@ import torch
 import hippo_probe as hp
 from hippo_probe.paper import readout as R
 from hippo_probe.paper.config import network_name
-from hippo_probe.training.checkpoint import save_atomic
+from hippo_probe.model.checkpoint import save_atomic
 
 ROOT = Path(__file__).resolve().parents[1]
 

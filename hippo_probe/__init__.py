@@ -66,7 +66,7 @@ _LAZY_ATTRS = {
     # from its own module: importing the submodule hippo_probe.model.record (as the
     # `record` command does) rebinds the package attribute `record` to the module
     "record": "hippo_probe.model.record",
-    "load_pretrained": "hippo_probe.pretrained",
+    "load_pretrained": "hippo_probe.model.load",
 }
 _SUBMODULES = {
     "world", "tasks", "model", "training", "baselines", "recording", "analysis", "plot",

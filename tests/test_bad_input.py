@@ -270,7 +270,7 @@ def test_load_pretrained_names_what_it_expected(kwargs, error, words):
 @pytest.fixture(scope="module")
 def shipped():
     from hippo_probe.pretrained import resolve_network_file
-    from hippo_probe.training.checkpoint import load
+    from hippo_probe.model.checkpoint import load
 
     return load(resolve_network_file("localization_compass"))
 
@@ -282,7 +282,7 @@ def test_a_checkpoint_of_other_shapes_is_one_clear_line(damage, words, shipped, 
     """Not torch's RuntimeError from load_state_dict."""
     import torch
 
-    from hippo_probe.training.checkpoint import save_atomic
+    from hippo_probe.model.checkpoint import save_atomic
 
     first = next(iter(shipped["model"]))
     model = dict(shipped["model"])
@@ -299,7 +299,7 @@ def test_a_checkpoint_of_other_shapes_is_one_clear_line(damage, words, shipped, 
 
 def test_resuming_a_checkpoint_without_optimizer_state_names_what_is_missing(
         shipped, tmp_path, capsys):
-    from hippo_probe.training.checkpoint import save_atomic
+    from hippo_probe.model.checkpoint import save_atomic
 
     run = tmp_path / "run"
     save_atomic(shipped, run / "checkpoint.pt")          # a shipped network, not a run
@@ -310,7 +310,7 @@ def test_resuming_a_checkpoint_without_optimizer_state_names_what_is_missing(
 
 
 def test_export_of_a_checkpoint_without_a_log_is_a_clear_error(shipped, tmp_path, capsys):
-    from hippo_probe.training.checkpoint import save_atomic
+    from hippo_probe.model.checkpoint import save_atomic
 
     save_atomic({k: v for k, v in shipped.items() if k != "test"}, tmp_path / "checkpoint.pt")
     assert main(["export-network", str(tmp_path), "x", "--dest", str(tmp_path / "d")]) == 2
@@ -320,7 +320,7 @@ def test_export_of_a_checkpoint_without_a_log_is_a_clear_error(shipped, tmp_path
 
 def _exportable(shipped, run):
     """A run's checkpoint made of a shipped network: what export-network needs."""
-    from hippo_probe.training.checkpoint import save_atomic
+    from hippo_probe.model.checkpoint import save_atomic
 
     save_atomic(dict(shipped, log={"class_weight": 0.0}, step=1, best_model=None,
                      best_loss=1.0), run / "checkpoint.pt")
@@ -615,7 +615,7 @@ def test_a_checkpoint_declaring_a_huge_network_is_refused_before_allocating(tmp_
 
     import torch
 
-    from hippo_probe.training.checkpoint import save_atomic
+    from hippo_probe.model.checkpoint import save_atomic
 
     net = hp.load_pretrained("localization")
     obj = torch.load(net.info["file"], weights_only=True)

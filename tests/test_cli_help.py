@@ -173,7 +173,7 @@ def test_help_does_not_import_torch():
 @pytest.fixture(scope="module")
 def two_trials():
     pytest.importorskip("torch")
-    from hippo_probe.pretrained import load_pretrained
+    from hippo_probe.model.load import load_pretrained
     from hippo_probe.tasks import make_trials
 
     net = load_pretrained("localization_compass")

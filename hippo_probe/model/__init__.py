@@ -8,7 +8,7 @@ import importlib
 
 _ATTRS = {"ModelConfig": ".config", "input_scale_for": ".config",
           "PeepholeLSTM": ".lstm", "reference_peephole_lstm": ".lstm",
-          "Navigator": ".navigator", "record": ".record"}
+          "Navigator": ".navigator", "record": ".record", "load_pretrained": ".load"}
 __all__ = sorted(_ATTRS)
 
 

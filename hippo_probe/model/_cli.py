@@ -31,17 +31,6 @@ def add_commands(sub):
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(run=_record)
 
-    e = sub.add_parser("export-network", help="ship a run's best network as pretrained "
-                                              "(network .pt + training log .json)")
-    e.add_argument("run_dir", metavar="RUN_DIR",
-                   help="run directory of `hippo-probe train` (holds network.pt and log.json)")
-    e.add_argument("name", metavar="NAME",
-                   help="pretrained name to ship it under (e.g. generalized)")
-    e.add_argument("--dest", required=True, metavar="FOLDER",
-                   help="folder to write into (the repository's shipped networks: "
-                        "hippo_probe/pretrained)")
-    e.set_defaults(run=_export)
-
     n = sub.add_parser("networks", help="the shipped networks, their training seeds and "
                                         "test errors as mean (min-max) over seeds")
     n.add_argument("--per-seed", action="store_true",
@@ -60,7 +49,7 @@ def _record(a):
     if a.baselines and not Path(a.baselines).exists():
         raise FileNotFoundError(f"--baselines {a.baselines} does not exist")
 
-    from ..pretrained import load_pretrained
+    from ..model.load import load_pretrained
     from ..recording import save_recording
     from ..tasks import make_trials
     from .record import record
@@ -77,14 +66,6 @@ def _record(a):
                  progress=not a.no_progress)
     save_recording(rec, a.out, overwrite=a.overwrite)
     print(f"saved {a.out}: {rec.sizes['time']} samples x {rec.sizes['unit']} units")
-
-
-def _export(a):
-    from ..training.export import export_network
-
-    check_output("--dest", a.dest, kind="folder")
-    paths = export_network(a.run_dir, a.name, a.dest)
-    print("\n".join(f"wrote {p}" for p in paths))
 
 
 def _networks(a):

@@ -320,7 +320,7 @@ def readout_network(base_file, decoder, *, description: dict) -> dict:
 
     from ..pretrained import checkpoint_world
     from ..tasks import task_config
-    from ..training.checkpoint import load
+    from ..model.checkpoint import load
 
     base = load(base_file)
     w, b = decoder_weights(decoder)

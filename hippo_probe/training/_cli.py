@@ -1,6 +1,6 @@
 """``hippo-probe train`` and ``hippo-probe evaluate``."""
 
-from ..cli import count, one_of
+from ..cli import check_output, count, one_of
 from ..tasks import SPLITS, TASKS
 from ..world.config import WORLDS
 
@@ -104,6 +104,17 @@ def add_commands(sub):
     e.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     e.set_defaults(run=_evaluate)
 
+    x = sub.add_parser("export-network", help="ship a run's best network as pretrained "
+                                              "(network .pt + training log .json)")
+    x.add_argument("run_dir", metavar="RUN_DIR",
+                   help="run directory of `hippo-probe train` (holds network.pt and log.json)")
+    x.add_argument("name", metavar="NAME",
+                   help="pretrained name to ship it under (e.g. generalized)")
+    x.add_argument("--dest", required=True, metavar="FOLDER",
+                   help="folder to write into (the repository's shipped networks: "
+                        "hippo_probe/pretrained)")
+    x.set_defaults(run=_export)
+
 
 def _train(a):
     import json
@@ -142,7 +153,7 @@ def _evaluate(a):
     import json
     import math
 
-    from ..pretrained import load_pretrained
+    from ..model.load import load_pretrained
     from ..tasks import make_trials, task_config
     from .trainer import evaluate_network, summarize
 
@@ -173,3 +184,11 @@ def _evaluate(a):
     print(json.dumps({"network": str(a.checkpoint), "task": task, "world": world,
                       "network_world": net.world, "split": a.split,
                       "trials": a.trials, **shown}, indent=1))
+
+
+def _export(a):
+    from .export import export_network
+
+    check_output("--dest", a.dest, kind="folder")
+    paths = export_network(a.run_dir, a.name, a.dest)
+    print("\n".join(f"wrote {p}" for p in paths))

@@ -7,7 +7,7 @@ import re
 from pathlib import Path
 
 from .._atomic import write_text
-from .checkpoint import load, require, save_atomic
+from ..model.checkpoint import load, require, save_atomic
 
 
 #: Names a shipped network may have: a plain file name, never a path or a hidden file.

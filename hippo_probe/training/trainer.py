@@ -33,7 +33,7 @@ from ..errors import RunInUseError
 from ..model.config import ModelConfig, input_scale_for, native_bf16, resolve_precision
 from ..model.navigator import Navigator
 from ..tasks import make_trials, task_config
-from .checkpoint import load, load_into, require, save_atomic
+from ..model.checkpoint import load, load_into, require, save_atomic
 from .config import TrainConfig
 from .data import TrainingTrials
 from .memory import reuse_freed_memory

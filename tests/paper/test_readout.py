@@ -142,7 +142,7 @@ def test_the_exported_readout_gives_the_decoders_logits(tiny, tmp_path):
     import torch
 
     import hippo_probe as hp
-    from hippo_probe.training.checkpoint import save_atomic
+    from hippo_probe.model.checkpoint import save_atomic
     from hippo_probe.training.trainer import save_network
     from hippo_probe.training import TrainConfig
 

@@ -7,7 +7,7 @@ import torch
 
 import hippo_probe as hp
 from hippo_probe.errors import CheckpointError
-from hippo_probe.training.checkpoint import load
+from hippo_probe.model.checkpoint import load
 
 
 class _Payload:
@@ -82,7 +82,7 @@ def test_a_checkpoint_with_flipped_bytes_is_refused_not_resumed(tmp_path):
     """64 flipped bytes inside a tensor: torch would load them; the digest refuses."""
     import zipfile
 
-    from hippo_probe.training.checkpoint import save_atomic
+    from hippo_probe.model.checkpoint import save_atomic
 
     path = tmp_path / "checkpoint.pt"
     save_atomic({"model": {"w": torch.randn(64, 64)}, "model_config": {"hidden": 8},

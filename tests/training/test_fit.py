@@ -328,7 +328,7 @@ def test_export_refuses_a_name_that_is_not_a_plain_file_name(uninterrupted, tmp_
 def test_evaluate_refuses_no_trials_and_a_broken_network(uninterrupted, tmp_path, capsys):
     from hippo_probe.cli import main
     from hippo_probe.training import export_network
-    from hippo_probe.training.checkpoint import save_atomic
+    from hippo_probe.model.checkpoint import save_atomic
     d, _ = uninterrupted
     pt, _ = export_network(d / "run", "tiny_eval", dest=tmp_path)
     assert main(["evaluate", str(pt), "--trials", "0"]) == 2

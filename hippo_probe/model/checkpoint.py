@@ -120,7 +120,7 @@ def _safe_globals() -> list:
     """Classes a checkpoint may name besides tensors and plain values (module docstring)."""
     from torch.torch_version import TorchVersion
 
-    from ..model.config import ModelConfig
+    from .config import ModelConfig
 
     return [ModelConfig, TorchVersion]
 

@@ -1,0 +1,90 @@
+"""Loading a network file (a shipped network, a training checkpoint or a run) as a
+:class:`~hippo_probe.model.navigator.Navigator`: the file is checked before anything is
+built from it."""
+
+from __future__ import annotations
+
+from ..pretrained import checkpoint_world, resolve_network_file
+
+
+def _check_declared_shapes(config, state, path) -> None:
+    """The architecture a file declares must be the one its parameters have, checked
+    before the network is built: a crafted ``hidden_size`` cannot make us allocate more
+    than the file holds."""
+    from ..errors import CheckpointError
+
+    h, f = config.hidden_size, config.input_size
+    expected = {"lstm.weight_h": (4 * h, h), "lstm.weight_x": (4 * h, f)}
+    if getattr(config, "variant", "faithful") == "placecells":
+        expected["position.linear.weight"] = (config.n_place_cells, h)
+    else:
+        expected["position.weight"] = (2, h)
+    if config.n_classes:
+        expected["classifier.weight"] = (config.n_classes, h)
+    for key, shape in expected.items():
+        got = tuple(state[key].shape) if key in state and hasattr(state[key], "shape") \
+            else None
+        if got != shape:
+            raise CheckpointError(f"`checkpoint` {str(path)!r} declares hidden_size={h}, "
+                                  f"n_classes={config.n_classes} but its `{key}` has shape "
+                                  f"{got} (expected {shape}): refused before building it")
+
+
+def load_pretrained(name: str, seed: int | None = None):
+    """Load a shipped network (or a network/checkpoint file) as a Navigator in eval mode.
+
+    The network runs float32 whatever precision trained it (``net.info["config"]`` names
+    that of its last trained stretch; the training log's ``precision_from_step``, every
+    stretch), so its outputs, and gradients taken through it, are the same everywhere.
+
+    Parameters
+    ----------
+    name : str or os.PathLike
+        A shipped network's name (:data:`NAMES`) or the path of a ``.pt`` file (a
+        shipped-network file, a training checkpoint or a run directory).
+    seed : int, optional
+        The training seed of a shipped network (default: the one reported first, 0);
+        :func:`shipped_seeds` lists them.
+
+    Examples
+    --------
+    >>> import hippo_probe as hp
+    >>> net = hp.load_pretrained("generalized")            # doctest: +SKIP
+    >>> net.task                                            # doctest: +SKIP
+    'generalized'
+    """
+    import dataclasses
+
+    try:
+        import torch  # noqa: F401
+    except ModuleNotFoundError:
+        from .._optional import missing
+        raise missing("torch", "load_pretrained") from None
+
+    from ..errors import CheckpointError
+    from .checkpoint import load, load_into
+    from .config import ModelConfig
+    from .navigator import Navigator
+
+    path = resolve_network_file(name, seed)
+    obj = load(path)
+    config = obj["model_config"]
+    try:
+        if isinstance(config, dict):
+            config = ModelConfig(**{**config, "input_scale": tuple(config["input_scale"])})
+        state = obj.get("best_model") or obj["model"]
+        _check_declared_shapes(config, state, path)
+        net = Navigator(dataclasses.replace(config, precision="fp32"))
+    except CheckpointError:
+        raise
+    except (TypeError, KeyError, ValueError) as err:
+        raise CheckpointError(f"`checkpoint` {str(path)!r} holds an architecture this "
+                              f"version cannot build ({type(err).__name__}: {err})") from None
+    load_into(net, state, path)
+    net.task = obj.get("task")
+    net.world = checkpoint_world(obj)
+    net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test",
+                                        "steps_done", "finished", "base_network")}
+    net.info["world"] = net.world
+    net.info["file"] = str(path)
+    return net.eval()

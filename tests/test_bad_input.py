@@ -434,12 +434,18 @@ def _damage(kind):
         return r.assign_attrs(dt=-0.4), "dt"
     if kind == "text dt":
         return r.assign_attrs(dt="0.1"), "dt"
+    if kind == "dt in ms":                      # samples 0.1 s apart, labelled 100
+        return r.assign_attrs(dt=100.0), "dt"
+    if kind == "trial in two pieces":           # trial 0's label on trial 2's samples
+        trial = r.trial.values.copy()
+        trial[240:360] = 0
+        return r.assign_coords(trial=("time", trial, r.trial.attrs)), "trial"
     raise AssertionError(kind)
 
 
 DAMAGE = ["inf position", "NaN activity", "text activity", "complex activity",
           "reversed time", "duplicate time", "NaN time", "environment changes in a trial",
-          "negative dt", "text dt"]
+          "negative dt", "text dt", "dt in ms", "trial in two pieces"]
 ANALYSES = {
     "ratemaps": lambda r: hp.ratemaps(r, bin_size=0.1),
     "spatial_information": lambda r: hp.spatial_information(r, n_shuffles=2, bin_size=0.1),
@@ -663,6 +669,40 @@ def test_a_store_left_aside_by_an_interrupted_overwrite_is_restored(tmp_path):
     with pytest.warns(UserWarning, match="is restored"):
         save_recording(r, tmp_path / "r.zarr", overwrite=True)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.zarr"]
+
+
+def test_a_write_that_fails_midway_leaves_no_partial_store_and_keeps_the_old(tmp_path,
+                                                                          monkeypatch):
+    import errno
+    import threading
+
+    import zarr.storage
+
+    n, n_trials = 40_000, 40
+    t = (np.arange(n) + np.repeat(np.arange(n_trials), n // n_trials) + 1) * 0.02
+    full = from_arrays(t, RNG.uniform(-0.5, 0.5, (n, 2)),
+                       activity=RNG.random((n, 8)).astype(np.float32),
+                       trial=np.repeat(np.arange(n_trials), n // n_trials),
+                       activity_kind="rate")
+    save_recording(full, tmp_path / "a.zarr")
+    save_recording(hp.select_trials(full, trials=[0]), tmp_path / "b.zarr")
+    lazy = open_recording(tmp_path / "a.zarr")      # written from dask's worker threads
+    real, count, lock = zarr.storage.LocalStore.set, [0], threading.Lock()
+
+    async def disk_full_at_the_fifth_chunk(self, key, value):
+        with lock:
+            count[0] += "/c" in key
+            fifth = "/c" in key and count[0] == 5
+        if fifth:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return await real(self, key, value)
+
+    monkeypatch.setattr(zarr.storage.LocalStore, "set", disk_full_at_the_fifth_chunk)
+    with pytest.raises(OSError, match="No space left"):
+        save_recording(lazy, tmp_path / "b.zarr", overwrite=True)
+    monkeypatch.undo()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.zarr", "b.zarr"]
+    assert open_recording(tmp_path / "b.zarr").sizes["time"] == n // n_trials
 
 
 # ------------------------------------------------------------------ NWB files from elsewhere

@@ -53,7 +53,8 @@ def validate(rec, *, check_data=None, config=DEFAULTS):
     Checks the dataset attrs, the presence, dims, dtypes, ``units`` and ``long_name`` of
     every schema variable, the time axis (finite, strictly increasing), the trial
     structure (each trial one contiguous block of samples listed in the trial table, in
-    table order, inside ``[trial_start, trial_stop]``, ``trial_time = time -
+    table order, inside ``[trial_start, trial_stop]``, its samples ``dt`` apart (median
+    within 10 %), ``trial_time = time -
     trial_start``, consecutive trials separated by a gap of at least one ``dt``), the
     environments (constant within a trial, equal to ``trial_environment``, listed in
     ``environment_id``) and, when ``check_data``, the values (``activity`` finite; no inf
@@ -186,6 +187,7 @@ def _check_time(rec):
         i = _first_bad(step <= 0)
         _fail("time", f"must be strictly increasing; time[{i}] = {_v(time[i])} is followed by "
                       f"time[{i + 1}] = {_v(time[i + 1])}")
+    _check_sample_interval(rec.attrs["dt"], step, rec["trial"].values, "rec")
 
 
 def _check_trials(rec, config):
@@ -319,6 +321,27 @@ def check_block(name, values, origin=None):
     return values
 
 
+#: How far the median sample interval within trials may be from ``dt`` (a fraction of
+#: ``dt``): tracking clocks jitter by well under 1 %; a mislabelled ``dt`` (ms for s, or
+#: the rate of another stream) is off by a factor.
+DT_TOLERANCE = 0.1
+
+
+def _check_sample_interval(dt, step, trial, name) -> None:
+    """``dt`` must be the recording's sample interval: the median step between samples of
+    one trial within :data:`DT_TOLERANCE` of it (analyses divide counts by ``dt``)."""
+    if dt is None or not len(step):
+        return
+    within = step if trial is None else step[trial[1:] == trial[:-1]]
+    if not len(within):
+        return
+    median = float(np.median(within))
+    if abs(median / float(dt) - 1) > DT_TOLERANCE:
+        _fail("dt", f"(dataset attr of `{name}`) must be the sample interval; it is "
+                    f"{_v(dt)} s but samples within a trial are a median {median:.6g} s "
+                    f"apart (fix `dt`, or resample the session)")
+
+
 def check_analysable(rec, *, name="rec"):
     """The cheap rules of :func:`validate` that every analysis relies on; raise if broken.
 
@@ -328,8 +351,9 @@ def check_analysable(rec, *, name="rec"):
     table):
 
     - ``time``: finite, strictly increasing within each trial (across the whole
-      recording when it has no ``trial``);
-    - ``attrs["dt"]``, when present: a real number of seconds, finite and > 0;
+      recording when it has no ``trial``); each trial's samples one contiguous block;
+    - ``attrs["dt"]``, when present: a real number of seconds, finite and > 0, and the
+      sample interval (the median step within trials within 10 % of it);
     - ``attrs["activity_kind"]``, when present: a non-empty string; a kind the analyses do
       not know (:data:`~hippo_probe.recording.schema.ACTIVITY_UNITS`) is warned about, as
       it is read as a generic signal (no division by ``dt``, no offset for signed units);
@@ -400,6 +424,14 @@ def check_analysable(rec, *, name="rec"):
             within = " within a trial" if trial is not None else ""
             _fail("time", f"must be strictly increasing{within}; time[{i}] = "
                           f"{_v(time[i])} is followed by time[{i + 1}] = {_v(time[i + 1])}")
+        _check_sample_interval(attrs.get("dt"), step, trial, name)
+    if trial is not None and len(trial):
+        _, _, ids = trial_blocks(trial)
+        seen, counts = np.unique(ids, return_counts=True)
+        if (counts > 1).any():
+            _fail("trial", f"(of `{name}`) samples of each trial must be contiguous in "
+                           f"time; trial {_v(seen[counts > 1][0])} appears in "
+                           f"{counts[counts > 1][0]} separate blocks")
     for var in ("position", "head_direction", "activity"):
         if var not in rec.variables:
             continue

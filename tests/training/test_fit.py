@@ -401,20 +401,29 @@ def test_a_stopped_run_resumed_stops_again_or_trains_on_without_its_old_verdict(
     assert "stopped" not in done and len(done["train"]) == 6 and "test" in done
 
 
-def test_a_run_being_trained_by_another_process_is_refused(tmp_path):
+def test_a_run_being_trained_by_another_process_is_refused(tmp_path, monkeypatch):
     """The same command started twice would checkpoint over the first one's progress."""
     import fcntl
 
     from hippo_probe.errors import RunInUseError
+    from hippo_probe.training import trainer
+
+    def started(*args):
+        raise AssertionError("the second trainer got past the lock")
+
     run = tmp_path / "run"
     run.mkdir()
     with open(run / ".lock", "a+") as held:        # another trainer's lock
         fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
         held.write("4242")
         held.flush()
-        with pytest.raises(RunInUseError, match=r"being trained by another process "
-                                                r"\(pid 4242\)"):
-            fit(TrainConfig(**TINY), run, cache_dir=tmp_path / "cache", progress=False)
+        # refused before anything else starts (trial cache, threads, process group), so
+        # a second trainer started while the first is still starting cannot slip in
+        with monkeypatch.context() as m:
+            m.setattr(trainer, "_fit_pinned", started)
+            with pytest.raises(RunInUseError, match=r"being trained by another process "
+                                                    r"\(pid 4242\)"):
+                fit(TrainConfig(**TINY), run, cache_dir=tmp_path / "cache", progress=False)
         assert not (run / "checkpoint.pt").exists()
     # released (as by the holder's death), the run trains
     fit(TrainConfig(**{**TINY, "steps": 1}), run, cache_dir=tmp_path / "cache",

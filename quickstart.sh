@@ -30,5 +30,7 @@ if [ "$what" = test ]; then
   if [ "$rc" -eq 5 ]; then echo "pytest collected no tests" >&2; exit 1; fi
   exit "$rc"
 else
-  hippo-probe main "${@:2}"
+  # the main job refreshes this clone's tracked copies (paper_figures/), so `git diff`
+  # shows what this machine reproduced
+  hippo-probe main --refresh-tracked . "${@:2}"
 fi

@@ -1,9 +1,10 @@
 """``hippo-probe main`` (the README's main job) and ``hippo-probe figures``.
 
 Both call the figure builders of :mod:`hippo_probe.paper` in process and write under
-their ``--out`` only; the repository's tracked copies (``paper_figures/png/*.png``,
-``paper_figures/RESULTS.md``) are refreshed only by ``--refresh-tracked`` (``main`` passes
-it on at the paper size), and only from a run of every figure at the paper size.
+their ``--out`` only; a clone's tracked copies (``paper_figures/png/*.png``,
+``paper_figures/RESULTS.md``) are refreshed only by ``--refresh-tracked CLONE``, naming
+the clone, and only from a run of every figure at the paper size (``bash quickstart.sh
+main`` passes its own clone).
 """
 
 import time
@@ -25,15 +26,18 @@ def add_commands(sub):
                  "smoke test")
     cache_help = ("folder of the cached recordings, reused by later runs of the same size "
                   "(default: OUT/cache)")
+    refresh_help = ("also copy the figures and RESULTS.md over the tracked copies of the "
+                    "clone CLONE (CLONE/paper_figures/png/*.png, "
+                    "CLONE/paper_figures/RESULTS.md); only with --size paper and every "
+                    "figure")
     p = sub.add_parser("main", help="the README's main job: world statistics and every "
-                                    "paper figure, into one folder; at the paper size it "
-                                    "also refreshes the tracked copies (paper_figures/png, "
-                                    "paper_figures/RESULTS.md)")
+                                    "paper figure, into one folder")
     p.add_argument("--out", default="figures", metavar="FOLDER",
                    help="folder of the figures and their numbers")
     p.add_argument("--size", default="paper", choices=sizes, type=one_of("size", sizes),
                    help=size_help)
     p.add_argument("--cache", default=None, metavar="FOLDER", help=cache_help)
+    p.add_argument("--refresh-tracked", default=None, metavar="CLONE", help=refresh_help)
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(run=_main)
     f = sub.add_parser("figures", help="regenerate the paper figures and RESULTS.md into "
@@ -51,10 +55,7 @@ def add_commands(sub):
                         f"{', '.join(WORLDS)} (default: every world with shipped networks; "
                         f"each world's figures once per shipped training seed)")
     f.add_argument("--cache", default=None, metavar="FOLDER", help=cache_help)
-    f.add_argument("--refresh-tracked", action="store_true",
-                   help="also copy the figures and RESULTS.md over the repository's tracked "
-                        "copies (paper_figures/png/*.png, paper_figures/RESULTS.md); only "
-                        "with --size paper and every figure (no --only)")
+    f.add_argument("--refresh-tracked", default=None, metavar="CLONE", help=refresh_help)
     f.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     f.set_defaults(run=_figures)
 
@@ -63,17 +64,17 @@ def _check_refresh(args):
     """Refuse --refresh-tracked, before any work, unless every figure runs at the paper
     size: the tracked copies show the study's scale, and a partial run would turn the
     other claims of RESULTS.md into "n/a"."""
-    if not args.refresh_tracked:
+    if args.refresh_tracked is None:
         return
     if args.size != "paper":
         raise ValueError(f"--refresh-tracked needs --size paper (the tracked copies show "
                          f"the study's scale); got --size {args.size}")
-    if args.only is not None:
+    if getattr(args, "only", None) is not None:
         raise ValueError("--refresh-tracked needs every figure; drop --only "
                          f"{' '.join(args.only)}")
     from .paper.tracked import check_repository
 
-    check_repository()      # a clone to refresh, or one clear line now
+    check_repository(args.refresh_tracked)      # a clone to refresh, or one line now
 
 
 def _figures(args, *, extra_tracked=()):
@@ -91,7 +92,7 @@ def _figures(args, *, extra_tracked=()):
     if not runs:
         raise ValueError(f"no shipped networks of the world(s) {', '.join(worlds)}: "
                          f"`hippo-probe export-network` a trained run first")
-    if args.refresh_tracked and set(worlds) != set(config.WORLDS):
+    if args.refresh_tracked is not None and set(worlds) != set(config.WORLDS):
         raise ValueError("--refresh-tracked needs every world; drop --world")
     base = config.with_cache(config.CONFIGS[args.size], cache)
     # the figures of the first run (the darkness world's first seed once shipped) are the
@@ -114,7 +115,7 @@ def _figures(args, *, extra_tracked=()):
     try:
         notes = config.repository_file(NOTES, argument="notes")
     except FileNotFoundError:
-        if args.refresh_tracked:
+        if args.refresh_tracked is not None:
             raise
         notes = None
         print(f"(no {NOTES}: RESULTS.md without the notes; run from a clone for them)")
@@ -126,16 +127,17 @@ def _figures(args, *, extra_tracked=()):
     try:
         session = config.repository_file(rodent.SESSION, argument="session")
     except FileNotFoundError:
-        if args.refresh_tracked:
+        if args.refresh_tracked is not None:
             raise
         print(f"(no {rodent.SESSION}: the network-vs-rodent comparison runs from a clone)")
     else:
         print(f"== network vs rodent ({primary.run}) ==")
         rodent.make(primary, out, session=session)
         shown.append(out / "network_vs_rodent.png")
-    if args.refresh_tracked:
+    if args.refresh_tracked is not None:
         from .paper.tracked import refresh_tracked
-        for path in refresh_tracked([*shown, *extra_tracked], out / "RESULTS.md"):
+        for path in refresh_tracked([*shown, *extra_tracked], out / "RESULTS.md",
+                                    repository=args.refresh_tracked):
             print(f"refreshed {path}")
     print(f"all figures in {out}/ ({time.time() - t_all:.0f} s)")
 
@@ -144,15 +146,9 @@ def _main(args):
     out = check_output("--out", args.out, kind="folder")
     if args.cache is not None:
         check_output("--cache", args.cache, kind="folder")
-    from .paper._repository import REPOSITORY
-
-    # the main job at the study's scale regenerates the repository's tracked copies too,
-    # when it runs from a clone (an installed package has none)
-    refresh = args.size == "paper" and REPOSITORY is not None
-    if args.size == "paper" and not refresh:
-        print("(not a clone of the repository: no tracked copies to refresh)")
+    _check_refresh(args)
     from ._atomic import save_figure
-    from .world.stats import format_stats, plot_example_trials, world_stats
+    from .trial_stats import format_stats, plot_example_trials, world_stats
 
     out.mkdir(parents=True, exist_ok=True)
     print("== World statistics (500 test trials per task) ==")
@@ -161,6 +157,6 @@ def _main(args):
     save_figure(fig, out / "example_trials.png", dpi=120)
     print(f"saved {out / 'example_trials.png'}")
     _figures(args.__class__(out=args.out, size=args.size, only=None, cache=args.cache,
-                            refresh_tracked=refresh, world=None,
+                            refresh_tracked=args.refresh_tracked, world=None,
                             no_progress=args.no_progress),
              extra_tracked=(out / "example_trials.png",))

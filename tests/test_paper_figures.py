@@ -25,11 +25,11 @@ def _git_status():
 
 @pytest.fixture(scope="module")
 def figures_run(tmp_path_factory):
-    """One tiny run of ``hippo-probe figures`` (the slow part of this module), with the
-    checkout's git status before and after it."""
+    """One tiny run of ``hippo-probe main`` (world statistics, then ``figures``: the slow
+    part of this module), with the checkout's git status before and after it."""
     out = tmp_path_factory.mktemp("figures")
     before = _git_status()
-    run = subprocess.run([sys.executable, "-m", "hippo_probe.cli", "figures", "--size",
+    run = subprocess.run([sys.executable, "-m", "hippo_probe.cli", "main", "--size",
                           "tiny", "--out", str(out)], capture_output=True, text=True,
                          cwd=ROOT, timeout=1200)
     assert run.returncode == 0, run.stderr[-4000:]
@@ -46,10 +46,11 @@ def figures(figures_run):
 
 
 def test_figures_write_only_under_out(figures_run):
-    """`hippo-probe figures --out DIR` leaves the checkout as it was: the tracked copies
-    (paper_figures/png, RESULTS.md) are refreshed only by --refresh-tracked."""
+    """`hippo-probe main --out DIR` leaves the checkout as it was: the tracked copies
+    (paper_figures/png, RESULTS.md) are refreshed only by --refresh-tracked CLONE."""
     out, before, after = figures_run
     assert (out / "RESULTS.md").stat().st_size > 1000
+    assert (out / "example_trials.png").stat().st_size > 1000
     # a tiny run's verdicts mean nothing, and its RESULTS.md says so first
     assert "every verdict means nothing" in (out / "RESULTS.md").read_text().split("\n")[2]
     assert (out / "network_vs_rodent.json").exists()
@@ -60,16 +61,31 @@ def test_figures_write_only_under_out(figures_run):
     assert after == before
 
 
-@pytest.mark.parametrize("extra", [["--size", "tiny"], ["--size", "full"],
-                                   ["--size", "paper", "--only", "fig2"]])
+@pytest.mark.parametrize("extra", [["figures", "--size", "tiny"],
+                                   ["figures", "--size", "full"],
+                                   ["figures", "--size", "paper", "--only", "fig2"],
+                                   ["main", "--size", "tiny"]])
 def test_refresh_tracked_needs_every_figure_at_the_paper_size(tmp_path, capsys, extra):
     from hippo_probe.cli import main
 
     out = tmp_path / "out"
-    assert main(["figures", "--refresh-tracked", "--out", str(out), *extra]) == 2
+    assert main([*extra, "--refresh-tracked", str(ROOT), "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "--refresh-tracked needs" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()          # refused before any work
+
+
+@pytest.mark.parametrize("command", ["figures", "main"])
+def test_refresh_tracked_names_a_clone_and_refuses_a_folder_that_is_not_one(tmp_path,
+                                                                            capsys, command):
+    from hippo_probe.cli import main
+
+    out = tmp_path / "out"
+    assert main([command, "--size", "paper", "--refresh-tracked", str(tmp_path),
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "a clone of the hippo_probe repository; none at" in err
+    assert not out.exists()
 
 
 def test_package_boundary():

@@ -1,9 +1,11 @@
 """The repository's tracked copies of the figures: ``paper_figures/png/*.png`` (shown by
 the README) and ``paper_figures/RESULTS.md``.
 
-They are refreshed only on request (``hippo-probe figures --refresh-tracked``, and
-``hippo-probe main`` at the paper size), from a folder where every figure was just made at
+They are refreshed only on request, naming the clone (``hippo-probe figures
+--refresh-tracked CLONE``, ``hippo-probe main --refresh-tracked CLONE``; ``bash
+quickstart.sh main`` passes its own), from a folder where every figure was just made at
 the paper size, so the repository shows what its own networks give at the study's scale.
+The package never finds a clone to write into by itself.
 """
 
 from __future__ import annotations
@@ -12,7 +14,6 @@ import shutil
 from pathlib import Path
 
 from .._atomic import atomic_path
-from ._repository import REPOSITORY
 
 #: Folder of the README's figure copies, inside the repository.
 PNG = "paper_figures/png"
@@ -20,20 +21,17 @@ PNG = "paper_figures/png"
 RESULTS = "paper_figures/RESULTS.md"
 
 
-def check_repository(repository=None) -> Path:
-    """The clone whose tracked copies are refreshed (default: the one the package runs
-    from); raises FileNotFoundError if there is none."""
-    if repository is None:
-        repository = REPOSITORY
+def check_repository(repository) -> Path:
+    """The clone ``repository`` whose tracked copies are refreshed; raises
+    FileNotFoundError if it is not one (no ``paper_figures/png`` in it)."""
     if repository is None or not (Path(repository) / PNG).is_dir():
         raise FileNotFoundError(
             f"the tracked copies ({PNG}/, {RESULTS}) are files of a clone of the "
-            f"hippo_probe repository; none found"
-            + (f" at {repository}" if repository is not None else ""))
+            f"hippo_probe repository; none at {repository}")
     return Path(repository)
 
 
-def refresh_tracked(figures, results, *, repository=None) -> list[Path]:
+def refresh_tracked(figures, results, *, repository) -> list[Path]:
     """Copy freshly made figures and RESULTS.md over the repository's tracked copies.
 
     Only figures that already have a tracked copy (of the same file name) are copied (the
@@ -46,8 +44,8 @@ def refresh_tracked(figures, results, *, repository=None) -> list[Path]:
         never copied).
     results : path
         The RESULTS.md made by this run.
-    repository : str or os.PathLike, optional
-        The clone whose copies are refreshed; default the one the package runs from.
+    repository : str or os.PathLike
+        The clone whose copies are refreshed.
 
     Returns
     -------

@@ -699,13 +699,43 @@ def recording_overview(rec, *, trial=None, n_units=64, fig=None):
     return fig
 
 
+def drawn_once_in_jupyter(fig):
+    """Return ``fig``, made to be drawn once when a Jupyter cell returns it.
+
+    A Figure that ends a cell is drawn twice: as the cell's value, and by pyplot's inline
+    backend, which draws every open figure when the cell ends. Whichever draws ``fig``
+    first here also hands it back from pyplot, so the other finds nothing left to draw;
+    a later ``fig`` alone in a cell draws it again, as for any Figure. Outside IPython
+    nothing changes.
+    """
+    import matplotlib.pyplot as plt
+
+    def _ipython_display_():
+        from IPython.display import display
+
+        plt.close(fig)                     # drawn now: pyplot's flush will not again
+        del fig._ipython_display_          # display it the usual way, just this once
+        try:
+            display(fig)
+        finally:
+            fig._ipython_display_ = _ipython_display_
+
+    fig._ipython_display_ = _ipython_display_
+    return fig
+
+
 def plot_result(result, **kwargs):
     """The natural plot of any hippo_probe result (dispatch on ``attrs['analysis']``), or
     of a recording itself (:func:`recording_overview`).
 
     Keyword arguments go to the specific helper: ``ax=`` for single-axes plots,
-    ``fig=`` / ``axes=`` for grids; every helper returns the figure it drew into.
+    ``fig=`` / ``axes=`` for grids; every helper returns the figure it drew into, drawn
+    once when it ends a Jupyter cell (:func:`drawn_once_in_jupyter`).
     """
+    return drawn_once_in_jupyter(_plot_result(result, **kwargs))
+
+
+def _plot_result(result, **kwargs):
     kind = result.attrs.get("analysis")
     if kind is None and "schema_version" in result.attrs and "activity" in result:
         return recording_overview(result, **kwargs)

@@ -4,7 +4,8 @@ The protocol is :mod:`hippo_probe.paper.readout`'s: features of each frozen netw
 specialized-task trials, a multinomial logistic regression (L2 strength chosen on
 validation trials) at each training-set size, scored on test trials every 10 s. The
 study's readout reads the units ``h``; the variant (labelled as one) reads a leaky
-average of them, its time constant chosen on validation trials at ``--tau-size`` trials.
+average of them, its time constant chosen on validation trials at ``--tau-size`` trials
+and ``C = --tau-c``, then fitted like the study's readout.
 
     python analyses/arena_readout.py [--world darkness] [--seeds 0 1 2]
         [--sizes 4000 16000 64000] [--features cache/readout]
@@ -52,8 +53,10 @@ def main():
     ap.add_argument("--taus", type=float, nargs="+", default=list(R.READOUT.taus),
                     help="time constants (s) of the leaky-average variant tried "
                          "('inf': the running mean)")
-    ap.add_argument("--tau-size", type=int, default=16000,
+    ap.add_argument("--tau-size", type=int, default=4000,
                     help="training trials at which the variant's time constant is chosen")
+    ap.add_argument("--tau-c", type=float, default=1.0,
+                    help="the L2 strength C at which the time constant is chosen")
     ap.add_argument("--kinds", nargs="+", default=["h", "leaky"],
                     choices=("h", "leaky"))
     ap.add_argument("--features", default=str(ROOT / "cache" / "readout"))
@@ -108,22 +111,19 @@ def main():
         res = R.learning_curve(a.features, key, ["h"] if "h" in a.kinds else [], cfg)
         decoders = res.pop("decoders")
         if "leaky" in a.kinds:
-            small = (a.tau_size,)          # the time constant is chosen at one size
-            scan = R.learning_curve(a.features, key, R.feature_kinds(cfg)[1:], cfg,
-                                    sizes=small)
+            # the time constant is chosen at one size and one C (each fit of the scan is
+            # as costly as the study's readout), then fitted along the whole C grid
+            scan = R.learning_curve(a.features, key, R.feature_kinds(cfg)[1:],
+                                    replace(cfg, c_grid=(a.tau_c,)), sizes=(a.tau_size,))
             scan.pop("decoders")
             at = {k: v["rows"][-1]["validation_accuracy_late"]
                   for k, v in scan["kinds"].items()}
             best = max(at, key=at.get)
-            res["leaky_tau_choice"] = {"train_trials": small[-1],
+            res["leaky_tau_choice"] = {"train_trials": a.tau_size, "c": a.tau_c,
                                        "validation_accuracy_late": at, "chosen": best}
-            res["kinds"].update(scan["kinds"])
-            others = tuple(n for n in cfg.sizes if n != a.tau_size)
-            if others:
-                more = R.learning_curve(a.features, key, [best], cfg, sizes=others)
-                more.pop("decoders")
-                rows = res["kinds"][best]["rows"] + more["kinds"][best]["rows"]
-                res["kinds"][best]["rows"] = sorted(rows, key=lambda r: r["train_trials"])
+            chosen = R.learning_curve(a.features, key, [best], cfg)
+            chosen.pop("decoders")
+            res["kinds"].update(chosen["kinds"])
         res.update(network=name, features=key, world=a.world,
                    config=dict(asdict(cfg), taus=[str(t) for t in cfg.taus]),
                    fit_seconds=round(time.time() - t1))

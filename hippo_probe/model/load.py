@@ -4,7 +4,67 @@ built from it."""
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 from ..pretrained import checkpoint_world, resolve_network_file
+
+#: The key of a readout file: an arena classifier alone, fitted on the frozen network it
+#: names (``{"name", "seed", "parameters_sha256"}``). The network's parameters are not
+#: copied into it; they are read from that network's file when the readout is loaded.
+READOUT_OF = "readout_of"
+_PLAIN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
+
+
+def parameters_digest(obj: dict) -> str:
+    """sha256 of a network file's parameters (its best ones if it has both), whatever
+    else the file holds: what a readout was fitted on."""
+    from .checkpoint import content_digest
+
+    return content_digest({"model": obj.get("best_model") or obj["model"]})
+
+
+def base_file(readout_path, name: str, seed: int) -> Path:
+    """The file of the network a readout reads: ``<name>[_seed<k>].pt`` beside the readout
+    file if there is one, else the shipped network of that name and seed."""
+    beside = Path(readout_path).parent / (f"{name}.pt" if not seed else f"{name}_seed{seed}.pt")
+    return beside if beside.is_file() else resolve_network_file(name, seed or None)
+
+
+def network_parameters(obj: dict, path) -> dict:
+    """The parameters a loaded network file ``obj`` (read from ``path``) stands for: its
+    best ones if it has both, and for a readout file (:data:`READOUT_OF`) its network's
+    with the readout's classifier."""
+    if READOUT_OF in obj:
+        return _readout_parameters(obj, path)
+    return obj.get("best_model") or obj["model"]
+
+
+def _readout_parameters(obj: dict, path) -> dict:
+    """A readout file's parameters: its base network's, with the readout's classifier."""
+    from ..errors import CheckpointError
+    from .checkpoint import load
+
+    ref = obj[READOUT_OF]
+    name, seed = (ref.get("name"), ref.get("seed")) if isinstance(ref, dict) else (None, None)
+    if not (isinstance(name, str) and _PLAIN_NAME.fullmatch(name)
+            and isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
+        raise CheckpointError(f"`checkpoint` {str(path)!r} is a readout whose network is "
+                              f"not named by a plain name and seed: {ref!r}")
+    try:
+        base = load(base_file(path, name, seed))
+    except (ValueError, FileNotFoundError) as err:
+        raise CheckpointError(f"`checkpoint` {str(path)!r} reads the network {name!r} "
+                              f"(seed {seed}), which cannot be loaded: {err}") from None
+    if parameters_digest(base) != ref.get("parameters_sha256"):
+        raise CheckpointError(f"`checkpoint` {str(path)!r} was fitted on other parameters "
+                              f"of the network {name!r} (seed {seed}) than those found; "
+                              f"refit it on this version of that network")
+    head = obj["model"]
+    if set(head) != {"classifier.weight", "classifier.bias"}:
+        raise CheckpointError(f"`checkpoint` {str(path)!r} is a readout and must hold only "
+                              f"the classifier; got {sorted(head)}")
+    return {**(base.get("best_model") or base["model"]), **head}
 
 
 def _check_declared_shapes(config, state, path) -> None:
@@ -72,7 +132,7 @@ def load_pretrained(name: str, seed: int | None = None):
     try:
         if isinstance(config, dict):
             config = ModelConfig(**{**config, "input_scale": tuple(config["input_scale"])})
-        state = obj.get("best_model") or obj["model"]
+        state = network_parameters(obj, path)
         _check_declared_shapes(config, state, path)
         net = Navigator(dataclasses.replace(config, precision="fp32"))
     except CheckpointError:
@@ -84,7 +144,8 @@ def load_pretrained(name: str, seed: int | None = None):
     net.task = obj.get("task")
     net.world = checkpoint_world(obj)
     net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test",
-                                        "steps_done", "finished", "base_network")}
+                                        "steps_done", "finished", "base_network",
+                                        READOUT_OF)}
     net.info["world"] = net.world
     net.info["file"] = str(path)
     return net.eval()

@@ -314,15 +314,26 @@ def learning_curve(folder, key: str, kinds, cfg: ReadoutConfig = READOUT,
 
 
 def readout_network(base_file, decoder, *, description: dict) -> dict:
-    """A shipped-network dict: the frozen network of ``base_file`` with the decoder's
-    weights (standardization folded in) as its arena classifier."""
+    """A readout file's content: the decoder's weights (standardization folded in) as
+    the arena classifier of the frozen network of ``base_file``.
+
+    The file holds the classifier alone and names its network by the base file's name
+    (``<name>[_seed<k>].pt``) and parameters' digest
+    (:data:`~hippo_probe.model.load.READOUT_OF`); :func:`hippo_probe.load_pretrained`
+    reads that network beside the readout file, or the shipped one, and refuses other
+    parameters than those the readout was fitted on.
+    """
     import torch
 
+    from ..model.checkpoint import load
+    from ..model.load import READOUT_OF, parameters_digest
     from ..pretrained import checkpoint_world
     from ..tasks import task_config
-    from ..model.checkpoint import load
 
+    base_file = Path(base_file)
     base = load(base_file)
+    stem, _, k = base_file.stem.rpartition("_seed")
+    name, seed = (stem, int(k)) if stem and k.isdigit() else (base_file.stem, 0)
     w, b = decoder_weights(decoder)
     classes = np.asarray(decoder.classes_)
     n_classes = task_config("specialized").n_arenas
@@ -334,15 +345,15 @@ def readout_network(base_file, decoder, *, description: dict) -> dict:
     weight = np.zeros((n_classes, w.shape[1]), np.float32)
     bias = np.full(n_classes, -1e4, np.float32)
     weight[classes], bias[classes] = w, b
-    state = {k: v.clone() for k, v in (base.get("best_model") or base["model"]).items()}
-    state["classifier.weight"] = torch.from_numpy(weight)
-    state["classifier.bias"] = torch.from_numpy(bias)
+    head = {"classifier.weight": torch.from_numpy(weight),
+            "classifier.bias": torch.from_numpy(bias)}
     model_config = dict(base["model_config"], n_classes=n_classes)
-    return {"model": state, "model_config": model_config, "task": "specialized",
+    return {"model": head, "model_config": model_config, "task": "specialized",
             "world": checkpoint_world(base), "config": description, "class_weight": None,
             "test": None, "steps_done": None, "finished": True,
-            "base_network": {"file": Path(base_file).name,
-                             "steps_done": base.get("steps_done"),
+            READOUT_OF: {"name": name, "seed": seed,
+                         "parameters_sha256": parameters_digest(base)},
+            "base_network": {"file": base_file.name, "steps_done": base.get("steps_done"),
                              "finished": base.get("finished")}}
 
 

@@ -15,7 +15,7 @@ _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
 
 #: At most this many per-step entries go into a shipped training log (a 40,000-step run
 #: would otherwise ship 7 MB of JSON); the run's checkpoint keeps every step.
-MAX_TRAIN_ENTRIES = 4000
+MAX_TRAIN_ENTRIES = 500
 
 
 def _thin(train: list) -> tuple[list, int]:

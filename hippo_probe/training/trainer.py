@@ -31,6 +31,7 @@ from .._validators import check_bool
 from .._version import __version__
 from ..errors import RunInUseError
 from ..model.config import ModelConfig, input_scale_for, native_bf16, resolve_precision
+from ..model.load import network_parameters
 from ..model.navigator import Navigator
 from ..tasks import make_trials, task_config
 from ..model.checkpoint import load, load_into, require, save_atomic
@@ -87,7 +88,7 @@ def build_network(config: TrainConfig) -> Navigator:
             raise ValueError(f"`init_from` {config.init_from!r} was trained in the "
                              f"{base_world!r} world; this run is of the {config.world!r} "
                              f"world (`world`)")
-        state = obj.get("best_model") or obj["model"]
+        state = network_parameters(obj, path)
         own = net.state_dict()
         wrong = {k: (tuple(v.shape), tuple(own[k].shape)) for k, v in state.items()
                  if k in own and v.shape != own[k].shape}

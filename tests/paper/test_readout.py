@@ -165,6 +165,41 @@ def test_the_exported_readout_gives_the_decoders_logits(tiny, tmp_path):
                                atol=1e-4)
 
 
+def test_a_readout_file_holds_its_classifier_and_refuses_another_network(tiny, tmp_path):
+    import torch
+
+    import hippo_probe as hp
+    from hippo_probe.errors import CheckpointError
+    from hippo_probe.model.checkpoint import load, save_atomic
+    from hippo_probe.model.load import READOUT_OF
+    from hippo_probe.training import TrainConfig
+    from hippo_probe.training.trainer import save_network
+
+    net, cfg, folder, key = tiny
+    base = tmp_path / "tinynet_seed3.pt"
+    save_network(net, TrainConfig(task="generalized", hidden_size=8), {}, base)
+    dec = R.learning_curve(folder, key, ["h"], cfg, progress=False)["decoders"]["h"]
+    readout = R.readout_network(base, dec, description={})
+    assert set(readout["model"]) == {"classifier.weight", "classifier.bias"}
+    assert readout[READOUT_OF]["name"] == "tinynet" and readout[READOUT_OF]["seed"] == 3
+    save_atomic(readout, tmp_path / "readout.pt")
+    loaded = hp.load_pretrained(tmp_path / "readout.pt")
+    for k, v in net.state_dict().items():
+        torch.testing.assert_close(loaded.state_dict()[k], v)
+    # the network it was fitted on, changed: refused rather than read with other units
+    changed = load(base)
+    changed["model"] = {k: v + 1e-3 if k == "lstm.bias" else v
+                        for k, v in changed["model"].items()}
+    save_atomic(changed, base)
+    with pytest.raises(CheckpointError, match="fitted on other parameters"):
+        hp.load_pretrained(tmp_path / "readout.pt")
+    # a network named by a path is not looked up
+    save_atomic({**readout, READOUT_OF: {**readout[READOUT_OF], "name": "../tinynet"}},
+                tmp_path / "escape.pt")
+    with pytest.raises(CheckpointError, match="not named by a plain name"):
+        hp.load_pretrained(tmp_path / "escape.pt")
+
+
 def test_the_readout_figure_draws_the_curve_and_the_learning_curve(tiny):
     import matplotlib
 

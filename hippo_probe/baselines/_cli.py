@@ -1,8 +1,7 @@
 """``hippo-probe baselines``."""
 
-from ..cli import check_output, count, one_of
-from ..tasks import SPLITS, TASKS
-from ..world.config import WORLDS
+from .._cli_trials import add_trial_options
+from ..cli import check_output, count
 
 
 def add_commands(sub):
@@ -12,23 +11,16 @@ def add_commands(sub):
     p = sub.add_parser(
         "baselines",
         help="run PI, SH, NB, the particle filter (and PF-SLAM) on a task's trials")
-    p.add_argument("--task", required=True, choices=TASKS, type=one_of("task", TASKS),
-                   help="task whose trials to run (PF-SLAM on the specialized task only)")
-    p.add_argument("--world", default="darkness", choices=WORLDS,
-                   type=one_of("world", WORLDS),
-                   help="world of the trials: darkness (the study's: the sensed heading "
-                        "drifts) or compass (no drift)")
-    p.add_argument("--split", default="test", choices=SPLITS, type=one_of("split", SPLITS),
-                   help="split of the trials")
-    p.add_argument("--seed", type=int, default=0, help="seed of the split")
+    add_trial_options(p, task="required", world="darkness", trials=None,
+                      trials_help="number of trials (default: the whole split)",
+                      task_help="task whose trials to run (PF-SLAM on the specialized task "
+                                "only)")
     p.add_argument("--out", required=True, metavar="STORE",
                    help="zarr store to write (estimates in the arena frame, PF covariances, "
                         "PF-SLAM class posteriors; layout: hippo_probe.baselines.results)")
     p.add_argument("--plot", default=None, metavar="PNG",
                    help="also save the localization error (m) vs time of every baseline "
                         "here (default: no plot)")
-    p.add_argument("--trials", type=count(), default=None, metavar="N",
-                   help="number of trials (default: the whole split)")
     p.add_argument("--first", type=count(0), default=0, metavar="INDEX",
                    help="index of the first trial in the split")
     p.add_argument("--particles", type=count(), default=None, metavar="N",

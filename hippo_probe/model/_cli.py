@@ -1,8 +1,8 @@
 """``hippo-probe record``, ``hippo-probe export-network`` and ``hippo-probe networks``."""
 
-from ..cli import check_output, count, one_of
-from ..tasks import SPLITS, TASKS
-from ..world.config import WORLDS, MotionConfig
+from .._cli_trials import add_trial_options
+from ..cli import check_output
+from ..world.config import MotionConfig
 
 
 def add_commands(sub):
@@ -12,16 +12,9 @@ def add_commands(sub):
     p.add_argument("--network", required=True,
                    help="pretrained name (e.g. generalized, generalized_compass; see "
                         "hippo_probe.pretrained) or a .pt file")
-    p.add_argument("--split", default="test", choices=SPLITS, type=one_of("split", SPLITS),
-                   help="split of the trials")
-    p.add_argument("--task", default=None, choices=TASKS, type=one_of("task", TASKS),
-                   help="task whose trials to run (default: the network's own)")
-    p.add_argument("--world", default=None, choices=WORLDS, type=one_of("world", WORLDS),
-                   help="world of the trials (default: the network's own)")
-    p.add_argument("--trials", type=count(), default=1000, metavar="N",
-                   help=f"number of trials (each {motion.n_steps} steps of "
-                        f"{motion.network_dt:g} s: {motion.n_steps * motion.network_dt:g} s)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the split")
+    add_trial_options(p, trials_help=f"number of trials (each {motion.n_steps} steps of "
+                                     f"{motion.network_dt:g} s: "
+                                     f"{motion.n_steps * motion.network_dt:g} s)")
     p.add_argument("--baselines", default=None, metavar="FILE",
                    help="add the estimates of a `hippo-probe baselines` output store (made "
                         "on the same task, world, split and seed; default: none)")

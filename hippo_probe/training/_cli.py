@@ -1,7 +1,8 @@
 """``hippo-probe train`` and ``hippo-probe evaluate``."""
 
+from .._cli_trials import add_trial_options
 from ..cli import check_output, count, one_of
-from ..tasks import SPLITS, TASKS
+from ..tasks import TASKS
 from ..world.config import WORLDS
 
 
@@ -93,14 +94,7 @@ def add_commands(sub):
     e.add_argument("checkpoint", metavar="NETWORK",
                    help="a .pt file (run checkpoint, network.pt) or a pretrained name (e.g. "
                         "generalized)")
-    e.add_argument("--split", default="test", choices=SPLITS, type=one_of("split", SPLITS),
-                   help="split of the trials")
-    e.add_argument("--trials", type=count(), default=1000, metavar="N", help="number of trials")
-    e.add_argument("--seed", type=int, default=0, help="seed of the split")
-    e.add_argument("--task", default=None, choices=TASKS, type=one_of("task", TASKS),
-                   help="task whose trials to run (default: the network's own)")
-    e.add_argument("--world", default=None, choices=WORLDS, type=one_of("world", WORLDS),
-                   help="world of the trials (default: the network's own)")
+    add_trial_options(e)
     e.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     e.set_defaults(run=_evaluate)
 

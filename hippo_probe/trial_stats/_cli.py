@@ -1,20 +1,13 @@
 """``hippo-probe world-stats``."""
 
-from ..cli import check_output, count, one_of
-from ..tasks import SPLITS
-from ..world.config import WORLDS
+from .._cli_trials import add_trial_options
+from ..cli import check_output
 
 
 def add_commands(sub):
     p = sub.add_parser("world-stats", help="statistics of each task's trials, and a picture")
-    p.add_argument("--trials", type=count(), default=500, metavar="N",
-                   help="trials per task")
-    p.add_argument("--world", default="darkness", choices=WORLDS, type=one_of("world", WORLDS),
-                   help="the world: darkness (the study's: the sensed heading drifts) or "
-                        "compass (no drift)")
-    p.add_argument("--split", default="test", choices=SPLITS, type=one_of("split", SPLITS),
-                   help="split of the trials")
-    p.add_argument("--seed", type=int, default=0, help="seed of the split")
+    add_trial_options(p, task=False, world="darkness", trials=500,
+                      trials_help="trials per task")
     p.add_argument("--plot", default=None, metavar="PNG",
                    help="save example arenas with trajectories and wall contacts here "
                         "(default: no picture)")

@@ -12,6 +12,7 @@ from .._angles import wrap_angle
 from .._validators import check_finite, check_number, check_option, check_real, check_shape
 from . import _common
 from ._common import refuse_map_options
+from ._docs import fill_doc
 from ._shuffles import MapStack, add_significance, check_percentile
 from .config import BORDER, CELL_CLASS
 from .place_fields import bin_coords, check_maps, detect_fields
@@ -298,6 +299,7 @@ def _resolve_walls(walls, maps, lead, x, y, size, *, search_width, merge_angle,
     return out
 
 
+@fill_doc
 def border_score(rec_or_maps, *, walls=None, n_shuffles=None, seed=None, percentile=None,
                  threshold=None, field_threshold=None, min_area=None, search_width=None,
                  bin_size=None, sigma=None, min_speed=None, by=None, extent=None):
@@ -329,17 +331,22 @@ def border_score(rec_or_maps, *, walls=None, n_shuffles=None, seed=None, percent
     walls : None, 'occupancy' or array (V, 2)
         The arena polygon: None = the recording's ``arena_vertices`` where known (one per
         environment), else estimated; 'occupancy' = always estimated; or vertices.
-    n_shuffles, seed, percentile, threshold
-        Circular time-shift shuffles (default 100 for a recording); the threshold is their
-        99th percentile (each unit's own, or ``threshold='pooled'``).
+    %(n_shuffles)s
+    %(seed)s
+    percentile, threshold
+        The threshold is the shuffles' 99th percentile (each unit's own, or
+        ``threshold='pooled'``); no shuffles for maps.
     field_threshold : float, optional
         Fraction of the range for fields (default 0.3).
     min_area : float, optional
         Smallest field in m^2 (default 0.02).
     search_width : int, optional
         Bins searched inwards for a visited bin (default 8).
-    bin_size, sigma, min_speed, by, extent
-        As in :func:`ratemaps` (``sigma`` defaults to 1 bin).
+    %(bin_size)s
+    %(sigma_maps)s
+    %(min_speed)s
+    %(by)s
+    %(extent)s
 
     Returns
     -------

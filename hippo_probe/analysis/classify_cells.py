@@ -20,6 +20,7 @@ from .grid_score import nan_reasons as grid_nan_reasons
 from .place_fields import bin_coords, check_maps, detect_fields
 from .spatial_information import skaggs_information
 from .speed_score import speed_arrays
+from ._docs import fill_doc
 
 #: Class name -> (score column, config attribute of its percentile, paper).
 CLASSES = {
@@ -59,6 +60,7 @@ def _one_environment(rec, environment):
     return select_trials(rec, environments=[environment]), int(environment)
 
 
+@fill_doc
 def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environment=None,
                    walls=None, bin_size=None, sigma=None, min_speed=None, config=None):
     """Every unit's cell-class scores, their shuffle thresholds and its class: one table.
@@ -101,17 +103,16 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     rec : xarray.Dataset
         A recording with ``activity`` and ``position`` (and ``head_direction`` for the
         head-direction and conjunctive classes: NaN without it); may be dask-backed.
-    n_shuffles : int, optional
-        Default 100.
-    seed : int, optional
-        Seed of the shifts.
+    %(n_shuffles)s
+    %(seed)s
     threshold : {'unit', 'pooled'}, optional
     environment : int, optional
         The environment to classify in (default: the most visited).
     walls : None, 'occupancy' or array (V, 2)
         The arena for the border score (see :func:`border_score`).
-    bin_size, sigma, min_speed
-        As in :func:`ratemaps` (``sigma`` defaults to 1 bin).
+    %(bin_size)s
+    %(sigma_maps)s
+    %(min_speed)s
     config : CellClassConfig, optional
         Percentiles and precedence (default :data:`~.config.CELL_CLASS`).
 

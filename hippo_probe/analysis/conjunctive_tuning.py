@@ -16,6 +16,7 @@ from .config import CELL_CLASS, CONJUNCTIVE, HEAD_DIRECTION
 from .head_direction_tuning import direction_bins, mean_vector
 from .ratemaps import _positions, position_bins, spatial_grid, tuning_sums
 from .spatial_information import skaggs_information
+from ._docs import fill_doc
 
 
 def _ratio(num, den):
@@ -158,6 +159,7 @@ def conjunctive_arrays(rec, *, n_shuffles, seed, n_bins, n_dir, min_speed, exten
                 phase0=phase0, theta=theta, grid=grid, dropped=dropped, why=why)
 
 
+@fill_doc
 def conjunctive_tuning(rec, *, n_shuffles=None, seed=None, percentile=None, threshold=None,
                        n_bins=None, n_directions=None, min_speed=None, extent=None):
     """Head-direction x place tuning: head-direction tuning, and the factorial model that
@@ -190,9 +192,8 @@ def conjunctive_tuning(rec, *, n_shuffles=None, seed=None, percentile=None, thre
     rec : xarray.Dataset
         A recording with ``activity``, ``position`` and ``head_direction``; may be
         dask-backed.
-    n_shuffles : int, optional
-        Default 100.
-    seed : int, optional
+    %(n_shuffles)s
+    %(seed)s
     percentile : float, optional
         Default 99.
     threshold : {'unit', 'pooled'}, optional
@@ -200,10 +201,8 @@ def conjunctive_tuning(rec, *, n_shuffles=None, seed=None, percentile=None, thre
         Spatial bins along the extent's longer side for the model (default 16).
     n_directions : int, optional
         Direction bins of the model (default 12).
-    min_speed : float, optional
-        Only samples at or above this speed count.
-    extent : tuple, optional
-        As in :func:`ratemaps`.
+    %(min_speed)s
+    %(extent)s
 
     Returns
     -------

@@ -8,6 +8,7 @@ from scipy import stats
 
 from .._validators import check_finite
 from . import _common
+from ._docs import fill_doc
 from .spatial_selectivity import spatial_selectivity
 
 
@@ -35,6 +36,7 @@ def _weights(rec, weights):
     return check_finite("weights", w)
 
 
+@fill_doc
 def context_cells(rec, weights=None, *, bin_size=None, min_speed=None):
     """Projection strength of each unit onto the classifier, and its spatial selectivity.
 
@@ -53,8 +55,8 @@ def context_cells(rec, weights=None, *, bin_size=None, min_speed=None):
         ``readout_weight`` (environment_id, unit) is used when ``weights`` is None.
     weights : array (n_classes, n_units) or DataArray with a 'unit' dim, optional
         Classifier weights.
-    bin_size, min_speed
-        As in :func:`spatial_selectivity`.
+    %(bin_size)s
+    %(min_speed)s
 
     Returns
     -------

@@ -11,6 +11,7 @@ from .._angles import wrap_angle
 from .._validators import check_number, check_option
 from . import _common
 from ._common import refuse_map_options
+from ._docs import fill_doc
 from ._shuffles import MapStack, add_significance, check_percentile, flat_maps
 from .config import CELL_CLASS, GRID
 from .place_fields import bin_coords, check_maps
@@ -343,6 +344,7 @@ def _grid_kwargs(min_overlap, annulus):
 
 
 # ------------------------------------------------------------------ public functions
+@fill_doc
 def spatial_autocorrelation(rec_or_maps, *, min_overlap=None, bin_size=None, sigma=None,
                             min_speed=None, by=None, extent=None):
     """Spatial autocorrelogram of every unit's rate map.
@@ -359,8 +361,11 @@ def spatial_autocorrelation(rec_or_maps, *, min_overlap=None, bin_size=None, sig
         A recording (maps made with :func:`ratemaps`) or the output of :func:`ratemaps`.
     min_overlap : int, optional
         Default 20 bins (Sargolini et al. 2006).
-    bin_size, sigma, min_speed, by, extent
-        Passed to :func:`ratemaps` when a recording is given.
+    %(bin_size)s
+    %(sigma_maps)s
+    %(min_speed)s
+    %(by)s
+    %(extent)s
 
     Returns
     -------
@@ -410,6 +415,7 @@ def spatial_autocorrelation(rec_or_maps, *, min_overlap=None, bin_size=None, sig
                         coords=coords, attrs=attrs, name="autocorrelation")
 
 
+@fill_doc
 def grid_score(rec_or_maps, *, n_shuffles=None, seed=None, percentile=None, threshold=None,
                annulus=None, min_overlap=None, bin_size=None, sigma=None, min_speed=None,
                by=None, extent=None):
@@ -451,8 +457,7 @@ def grid_score(rec_or_maps, *, n_shuffles=None, seed=None, percentile=None, thre
         or the output of :func:`ratemaps` (no shuffles then).
     n_shuffles : int, optional
         Default 100 for a recording, 0 for maps.
-    seed : int, optional
-        Seed of the shifts.
+    %(seed)s
     percentile : float, optional
         Percentile of the shuffles used as threshold (default 95).
     threshold : {'unit', 'pooled'}, optional
@@ -460,8 +465,11 @@ def grid_score(rec_or_maps, *, n_shuffles=None, seed=None, percentile=None, thre
     annulus : {'sweep', 'peaks'}, optional
     min_overlap : int, optional
         Lags with fewer bins visited twice are NaN (default 20).
-    bin_size, sigma, min_speed, by, extent
-        As in :func:`ratemaps` (``sigma`` defaults to 1 bin).
+    %(bin_size)s
+    %(sigma_maps)s
+    %(min_speed)s
+    %(by)s
+    %(extent)s
 
     Returns
     -------

@@ -8,6 +8,7 @@ import xarray as xr
 from .._angles import wrap_angle
 from .._validators import check_allocation, check_number
 from . import _common
+from ._docs import fill_doc
 from .config import HEAD_DIRECTION
 from .ratemaps import smooth_normalized, tuning_sums, warn_nonfinite
 
@@ -53,6 +54,7 @@ def rayleigh_p(n, r):
     return np.where(n > 0, np.minimum(p, 1.0), np.nan)
 
 
+@fill_doc
 def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=None,
                           by=None, min_speed=None):
     """Occupancy-normalised head-direction tuning curves and their mean vector.
@@ -79,14 +81,10 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
         Number of direction bins over [-pi, pi) (default 60, 6 degrees).
     sigma : float
         Circular Gaussian smoothing in bins (normalized convolution); default 0.
-    n_shuffles : int, optional
-        Circular time shifts for ``p_value`` (default 100; 0 = none).
-    seed : int, optional
-        Seed of the shifts.
-    by : {None, 'environment', 'trial'}
-        One curve per environment or trial.
-    min_speed : float, optional
-        Only samples at or above this speed (m/s) count.
+    %(n_shuffles)s
+    %(seed)s
+    %(by)s
+    %(min_speed)s
 
     Returns
     -------

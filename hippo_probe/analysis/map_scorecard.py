@@ -13,6 +13,7 @@ import numpy as np
 import xarray as xr
 
 from . import _common
+from ._docs import fill_doc
 from .config import SCORECARD as CFG
 from .place_field_stability import pearson_masked, place_field_stability
 from .place_fields import place_fields
@@ -28,6 +29,7 @@ def treves_rolls(rates, axis) -> np.ndarray:
         return np.nanmean(rates, axis) ** 2 / np.nanmean(rates ** 2, axis)
 
 
+@fill_doc
 def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None):
     """Place fields, remapping and sparsity of a recording in two or more environments.
 
@@ -63,8 +65,9 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
     rec : xarray.Dataset
         A recording with ``activity``, ``position``, ``trial`` and ``environment``, with
         trials in at least two environments (several trials in each).
-    bin_size, sigma, min_speed : optional
-        As :func:`ratemaps`.
+    %(bin_size)s
+    %(sigma_maps)s
+    %(min_speed)s
     config : ScorecardConfig, optional
 
     Returns

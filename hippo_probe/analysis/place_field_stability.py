@@ -7,6 +7,7 @@ import xarray as xr
 
 from .._validators import check_number, check_option
 from . import _common
+from ._docs import fill_doc
 from .config import STABILITY
 from .ratemaps import _ratemap_parts
 
@@ -52,6 +53,7 @@ def _split_codes(rec, split):
     return env_code * 2 + part, envs, how
 
 
+@fill_doc
 def place_field_stability(rec, *, split="halves", bin_size=None, sigma=None, min_speed=None,
                           extent=None, min_bins=None):
     """Correlation of each unit's rate maps from two disjoint parts of a session.
@@ -70,8 +72,10 @@ def place_field_stability(rec, *, split="halves", bin_size=None, sigma=None, min
         A recording with ``activity`` and ``position``; may be dask-backed.
     split : {'halves', 'odd_even'}
         How trials are divided.
-    bin_size, sigma, min_speed, extent
-        As in :func:`hippo_probe.ratemaps` (default: 1 bin of smoothing).
+    %(bin_size)s
+    %(sigma_maps)s
+    %(min_speed)s
+    %(extent)s
     min_bins : int, optional
         Fewer common visited bins give NaN (default 5).
 

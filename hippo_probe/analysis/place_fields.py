@@ -11,6 +11,7 @@ from scipy import ndimage
 from .._validators import check_dims, check_number, check_option
 from . import _common
 from ._common import refuse_map_options
+from ._docs import fill_doc
 from ._shuffles import flat_maps
 from .config import PLACE_FIELD
 from .ratemaps import ratemaps
@@ -192,6 +193,7 @@ def _interp(axis_values, index):
     return axis_values[0] + np.asarray(index, float) * step
 
 
+@fill_doc
 def place_fields(rec_or_maps, *, threshold=None, min_bins=None, min_peak=None,
                  connectivity=None, bin_size=None, sigma=None, min_speed=None, by=None,
                  extent=None):
@@ -222,8 +224,11 @@ def place_fields(rec_or_maps, *, threshold=None, min_bins=None, min_peak=None,
         Smallest field peak in the maps' units (default None: none).
     connectivity : {1, 2}, optional
         4- (1, default) or 8-connectivity (2).
-    bin_size, sigma, min_speed, by, extent
-        Passed to :func:`ratemaps` when a recording is given.
+    %(bin_size)s
+    %(sigma_maps)s
+    %(min_speed)s
+    %(by)s
+    %(extent)s
 
     Returns
     -------

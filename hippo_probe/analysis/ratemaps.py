@@ -13,6 +13,7 @@ from .._validators import check_allocation, check_number, check_real, check_shap
 from . import _common
 from ._binning import BinSums, bin_sums, compact, grid_bins
 from ._common import AnalysisWarning
+from ._docs import fill_doc
 from .config import RATEMAP
 
 
@@ -290,6 +291,7 @@ def _maps_dataarray(rec, parts, maps, *, by, min_speed):
                         name="ratemap")
 
 
+@fill_doc
 def ratemaps(rec, *, bin_size=None, sigma=None, min_occupancy=None, min_speed=None,
              by=None, extent=None):
     """Occupancy-normalised mean activity of every unit in every spatial bin.
@@ -307,20 +309,12 @@ def ratemaps(rec, *, bin_size=None, sigma=None, min_occupancy=None, min_speed=No
     rec : xarray.Dataset
         A recording (schema v1) with ``activity`` and ``position``; may be dask-backed
         (the samples are streamed chunk by chunk, never loaded whole).
-    bin_size : float, optional
-        Side of the square bins in metres; default: the extent's longer side / 32.
-    sigma : float, optional
-        Gaussian smoothing width in bins (default 1; 0 = no smoothing).
-    min_occupancy : float, optional
-        Bins visited for less than this many seconds are NaN (default 0).
-    min_speed : float, optional
-        Only samples at or above this speed (m/s) count; speed is ``rec.speed`` or derived
-        from ``position`` within each trial.
-    by : {None, 'environment', 'trial'}
-        One map per environment or per trial (a grid shared by all) or one overall.
-    extent : (x_min, x_max, y_min, y_max), optional
-        Area covered by the bins; default: the arenas' bounding box when the recording has
-        ``arena_vertices``, else the finite positions'. Samples outside are not counted.
+    %(bin_size)s
+    %(sigma_maps)s
+    %(min_occupancy)s
+    %(min_speed)s
+    %(by)s
+    %(extent)s
 
     Returns
     -------

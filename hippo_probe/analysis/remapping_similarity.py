@@ -9,6 +9,7 @@ import xarray as xr
 
 from .._validators import check_bool, check_number, check_seed
 from . import _common
+from ._docs import fill_doc
 from .config import REMAPPING
 from .ratemaps import _ratemap_parts
 
@@ -45,6 +46,7 @@ def pair_correlations(maps, min_common):
     return np.clip(r, -1.0, 1.0), common
 
 
+@fill_doc
 def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, extent=None,
                          min_common_bins=None, seed=None, center_units=False):
     r"""Population-vector correlation of trial pairs in the same vs different environments.
@@ -75,8 +77,8 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
         Default: the extent's longer side / 16 (single-trial maps need coarse bins).
     sigma : float, optional
         Smoothing in bins (default 1).
-    min_speed, extent
-        As in :func:`hippo_probe.ratemaps`.
+    %(min_speed)s
+    %(extent)s
     min_common_bins : int, optional
         Pairs sharing fewer visited bins give NaN (default 5).
     seed : int, optional

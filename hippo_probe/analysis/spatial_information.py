@@ -7,6 +7,7 @@ import xarray as xr
 
 from .._validators import check_dims
 from . import _common
+from ._docs import fill_doc
 from .config import INFORMATION
 from .ratemaps import _maps_dataarray, _ratemap_parts
 
@@ -46,6 +47,7 @@ def _nan_reason(mean, total_occ):
     return ""
 
 
+@fill_doc
 def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=None,
                         sigma=None, min_occupancy=None, min_speed=None, by=None,
                         extent=None):
@@ -73,10 +75,13 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
         :func:`ratemaps` (which keeps occupancy and ``activity_min``).
     n_shuffles : int, optional
         Number of circular time-shift shuffles (default 0; needs a recording).
-    seed : int, optional
-        Seed of the shifts.
-    bin_size, sigma, min_occupancy, min_speed, by, extent
-        Passed to :func:`ratemaps` when a recording is given (``sigma`` defaults to 0).
+    %(seed)s
+    %(bin_size)s
+    %(sigma_unsmoothed)s
+    %(min_occupancy)s
+    %(min_speed)s
+    %(by)s
+    %(extent)s
 
     Returns
     -------

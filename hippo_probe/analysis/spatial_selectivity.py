@@ -6,6 +6,7 @@ import numpy as np
 import xarray as xr
 
 from . import _common
+from ._docs import fill_doc
 from .ratemaps import _maps_dataarray, _ratemap_parts
 
 
@@ -31,6 +32,7 @@ def variance_explained(sums, counts, sumsq):
     return np.where(constant, np.nan, np.clip(eta2, 0.0, 1.0)), total / np.maximum(n, 1)
 
 
+@fill_doc
 def spatial_selectivity(rec, *, bin_size=None, min_speed=None, by=None, extent=None):
     """Fraction of each unit's activity variance explained by position.
 
@@ -49,8 +51,10 @@ def spatial_selectivity(rec, *, bin_size=None, min_speed=None, by=None, extent=N
     ----------
     rec : xarray.Dataset
         A recording with ``activity`` and ``position``; may be dask-backed.
-    bin_size, min_speed, by, extent
-        As in :func:`hippo_probe.ratemaps` (maps are not smoothed here).
+    %(bin_size)s
+    %(min_speed)s
+    %(by)s
+    %(extent)s
 
     Returns
     -------

@@ -11,6 +11,7 @@ from scipy import ndimage
 from .._validators import check_number, check_option
 from . import _common
 from ._common import shifts_for
+from ._docs import fill_doc
 from ._shuffles import add_significance, check_percentile
 from .config import CELL_CLASS, RATEMAP, SPEED
 
@@ -143,6 +144,7 @@ def speed_arrays(rec, *, n_shuffles, seed, sigma, min_speed, max_speed):
     return r, slope, intercept, sums, valid
 
 
+@fill_doc
 def speed_score(rec, *, n_shuffles=None, seed=None, percentile=None, threshold=None,
                 sigma=None, min_speed=None, max_speed=None):
     """Speed score of every unit: the correlation of its activity with running speed.
@@ -165,9 +167,8 @@ def speed_score(rec, *, n_shuffles=None, seed=None, percentile=None, threshold=N
     ----------
     rec : xarray.Dataset
         A recording with ``activity`` and ``position`` (or ``speed``); may be dask-backed.
-    n_shuffles : int, optional
-        Default 100.
-    seed : int, optional
+    %(n_shuffles)s
+    %(seed)s
     percentile : float, optional
         Default 99.
     threshold : {'unit', 'pooled'}, optional

@@ -1,7 +1,9 @@
 """Analyses of recordings (schema v1): the tools a hippocampus lab uses on rodent data.
 
 Each analysis is a plain function of a recording (an ``xarray.Dataset``) returning
-labelled xarray objects whose ``attrs`` say how they were made; each works on dask-backed
+labelled xarray objects whose ``attrs`` say how they were made: a DataArray when the
+result is one array of values (a rate map), a Dataset when it holds several named
+measures (a score, its threshold, its p-value); each works on dask-backed
 (lazy) recordings and never imports torch. Results plot themselves through the ``hp``
 accessor (``maps.hp.plot()``), registered with the recording and analysis packages.
 """

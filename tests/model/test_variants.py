@@ -108,3 +108,16 @@ def test_the_place_cell_outputs_validation_loss_is_its_training_objective():
     faithful = _net("faithful")
     assert _position_cost_at_chance(faithful, batch.target) == pytest.approx(
         float(np.mean(batch.target.astype(np.float32) ** 2)), rel=1e-6)
+
+
+def test_the_place_cell_decoding_floor_is_the_one_documented():
+    """Noise-free targets decode about 2.5 cm off (ModelConfig.place_cell_width)."""
+    from hippo_probe.model import ModelConfig
+
+    c = ModelConfig(variant="placecells")
+    readout = PlaceCellReadout(8, c.n_place_cells, c.place_cell_width,
+                               c.place_cell_extent, seed=0)
+    xy = torch.from_numpy(np.random.default_rng(0).uniform(-0.5, 0.5, (20000, 2))
+                          .astype(np.float32))
+    off = (readout.targets(xy) @ readout.centres - xy).norm(dim=-1)
+    assert 0.02 < float(off.mean()) < 0.03 and float(off.quantile(0.95)) < 0.06

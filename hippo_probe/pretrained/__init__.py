@@ -67,8 +67,11 @@ def resolve_network_file(name_or_path, seed=None) -> Path:
             raise ValueError(f"`seed` {seed} of the network {name_or_path!r} is not shipped; "
                              f"shipped seeds: {shipped_seeds(str(name_or_path))}")
         if not Path(name_or_path).exists():
-            raise ValueError(f"the network {name_or_path!r} is not shipped in this version "
-                             f"(its training has not finished); shipped: {available()}")
+            where = ("the compass-world ablation networks come with a clone of the "
+                     "repository, not with the installed wheel"
+                     if "_compass" in str(name_or_path) else "its training has not finished")
+            raise ValueError(f"the network {name_or_path!r} is not in this installation "
+                             f"({where}); shipped: {available()}")
     elif seed is not None:
         raise ValueError(f"`seed` selects among the shipped networks' training seeds; "
                          f"{name_or_path!r} is a file, so seed must be None; got {seed}")

@@ -307,13 +307,19 @@ def test_a_network_knows_its_world(uninterrupted, tmp_path):
     assert TrainConfig.from_dict({"task": "generalized"}).world == "compass"
 
 
-def test_a_shipped_name_not_trained_yet_is_a_clear_error():
-    from hippo_probe.pretrained import HERE, NAMES
-    missing = [name for name in NAMES if not (HERE / f"{name}.pt").exists()]
-    if not missing:
-        pytest.skip("every named network is shipped")
-    with pytest.raises(ValueError, match=f"'{missing[0]}' is not shipped in this version"):
-        hp.load_pretrained(missing[0])
+def test_a_named_network_not_in_this_installation_is_a_clear_error(tmp_path, monkeypatch):
+    import hippo_probe.pretrained as pretrained
+
+    # an installation without networks: a wheel (no compass-world ablation) or a version
+    # whose training has not finished
+    monkeypatch.setattr(pretrained, "HERE", tmp_path)
+    with pytest.raises(ValueError, match="'generalized_compass' is not in this installation "
+                                         r"\(the compass-world ablation networks come with "
+                                         "a clone"):
+        hp.load_pretrained("generalized_compass")
+    with pytest.raises(ValueError, match=r"'generalized' is not in this installation \(its "
+                                         "training has not finished\)"):
+        hp.load_pretrained("generalized")
 
 
 @pytest.mark.parametrize("name", ["../outside", "", ".hidden", "a/b", None])

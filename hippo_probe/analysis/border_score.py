@@ -247,11 +247,13 @@ def border_stats(maps, weights, walls: Walls, *, threshold, min_bins, connectivi
             "wall": best_wall, "n_fields": f.count}
 
 
-def _field_bins(bin_size, min_area, min_bins):
+def field_bins(bin_size, min_area, min_bins):
+    """Smallest field in bins: ``min_area`` (m^2) in bins of ``bin_size``, at least
+    ``min_bins``."""
     return max(int(min_bins), int(np.ceil(min_area / bin_size**2 - 1e-9)))
 
 
-def _resolve_walls(walls, maps, lead, x, y, size, *, search_width, merge_angle,
+def resolve_walls(walls, maps, lead, x, y, size, *, search_width, merge_angle,
                    min_wall_bins):
     """One :class:`Walls` per map group (list over the flattened non-unit lead dims)."""
     group_dims = [d for d in lead if d != "unit"]
@@ -410,10 +412,10 @@ def border_score(rec_or_maps, *, walls=None, n_shuffles=None, seed=None, percent
         maps = stack.observed
     maps, lead = check_maps("rec_or_maps", maps)
     x, y, size = bin_coords(maps)
-    geo = _resolve_walls(walls, maps, lead, x, y, size, search_width=search_width,
+    geo = resolve_walls(walls, maps, lead, x, y, size, search_width=search_width,
                          merge_angle=np.radians(BORDER.merge_angle),
                          min_wall_bins=BORDER.min_wall_bins)
-    min_bins = _field_bins(size, min_area, BORDER.min_bins)
+    min_bins = field_bins(size, min_area, BORDER.min_bins)
     offset, why_offset = _common.map_rate_offset(rec, maps)
     kw = dict(threshold=field_threshold, min_bins=min_bins)
     stats = stack_border_stats(maps.values, offset, geo, **kw)

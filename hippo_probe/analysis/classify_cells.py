@@ -11,11 +11,11 @@ from .._validators import check_option
 from . import _common
 from ._common import AnalysisWarning
 from ._shuffles import MapStack, summarize
-from .border_score import _field_bins, _resolve_walls, stack_border_stats
+from .border_score import field_bins, resolve_walls, stack_border_stats
 from .config import (BORDER, CELL_CLASS, CONJUNCTIVE, CONVENTIONS, GRID, PLACE_FIELD, SPEED,
                      CellClassConfig)
 from .conjunctive_tuning import conjunctive_arrays
-from .grid_score import _grid_kwargs, grid_stats, shuffled_scores
+from .grid_score import grid_kwargs, grid_stats, shuffled_scores
 from .grid_score import nan_reasons as grid_nan_reasons
 from .place_fields import bin_coords, check_maps, detect_fields
 from .spatial_information import skaggs_information
@@ -181,19 +181,66 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
             "over a session's duration: classify_cells(hp.poisson_spikes(rec, mean_rate=5.0))",
             AnalysisWarning, stacklevel=2)
 
-    # ---- spatial scores: one binning per batch of shifts for all three
+    maps, spatial, columns = _spatial_columns(rec, walls, n_shuffles=n_shuffles, seed=seed,
+                                              bin_size=bin_size, sigma=sigma,
+                                              min_speed=min_speed)
+    n_units = maps.sizes["unit"]
+    hd_phase, notes = _direction_columns(rec, columns, n_units, n_shuffles=n_shuffles,
+                                         seed=seed, min_speed=min_speed)
+    r, _, _, _, _ = speed_arrays(rec, n_shuffles=n_shuffles, seed=seed, sigma=SPEED.sigma,
+                                 min_speed=SPEED.min_speed, max_speed=SPEED.max_speed)
+    columns["speed_score"] = (r[:, 0], r[:, 1:].T)
+
+    coords = {k: c for k, c in maps.coords.items() if c.dims == ("unit",)}
+    out = xr.Dataset(coords=coords)
+    above, gate_above = _score_table(out, columns, cfg, threshold, n_shuffles,
+                                     info_units="bits/spike" if maps.attrs.get("units") == "Hz"
+                                     else "bits per unit of activity",
+                                     gated="head_direction" in rec.variables)
+    grid_obs, border_obs, fields = spatial["grid"], spatial["border"], spatial["fields"]
+    out["grid_spacing"] = ("unit", grid_obs["spacing"] * spatial["size"],
+                           {"units": "m", "long_name": "grid spacing"})
+    out["grid_orientation"] = ("unit", grid_obs["orientation"], {
+        "units": "rad", "long_name": "grid orientation (axes mod 60 deg, from +x)"})
+    out["border_coverage"] = ("unit", border_obs["coverage"], {
+        "units": "1", "long_name": "largest wall coverage by one field"})
+    out["n_fields"] = ("unit", fields.count, {"units": "1",
+                                              "long_name": "number of place fields"})
+    out["hd_preferred_direction"] = ("unit", hd_phase, {"units": "rad",
+                                                        "long_name": "preferred direction"})
+    _assign_classes(out, above, gate_above, border_obs["score"], fields.count, cfg)
+    geo = spatial["walls"]
+    attrs = _common.provenance(
+        "classify_cells", rec, n_shuffles=n_shuffles, seed=seed, threshold=threshold,
+        environment="None" if env is None else env, bin_size=spatial["size"], sigma=sigma,
+        sigma_units="bins", min_speed=min_speed, rate_offset=spatial["why_offset"],
+        walls_source=geo[0].source, wall_vertices=geo[0].vertices.tolist(),
+        rules={name: _rule(name, cfg) for name in CLASSES},
+        sources={name: CLASSES[name][2] for name in CLASSES}, **notes)
+    out.attrs = _common.report_nan(attrs, _common.entry_labels(out["grid_score"]),
+                                   grid_nan_reasons(grid_obs), "grid score")
+    return out
+
+
+def _spatial_columns(rec, walls, *, n_shuffles, seed, bin_size, sigma, min_speed):
+    """Grid score, border score and Skaggs information, observed and shuffled, from one
+    binning per batch of shifts for all three (:class:`~._shuffles.MapStack`).
+
+    Returns (maps, {grid, border, fields, walls, size, why_offset}, {column: (observed
+    (U,), shuffled (S, U))}).
+    """
     stack = MapStack(rec, n_shuffles=n_shuffles, seed=seed, bin_size=bin_size, sigma=sigma,
                      min_speed=min_speed, by=None, extent=None)
     maps, lead = check_maps("maps", stack.observed)
     x, y, size = bin_coords(maps)
     occupancy = maps["occupancy"].values
-    geo = _resolve_walls(walls, maps, lead, x, y, size, search_width=BORDER.search_width,
-                         merge_angle=np.radians(BORDER.merge_angle),
-                         min_wall_bins=BORDER.min_wall_bins)
+    geo = resolve_walls(walls, maps, lead, x, y, size, search_width=BORDER.search_width,
+                        merge_angle=np.radians(BORDER.merge_angle),
+                        min_wall_bins=BORDER.min_wall_bins)
     offset, why_offset = _common.map_rate_offset(rec, maps)
     border_kw = dict(threshold=BORDER.threshold,
-                     min_bins=_field_bins(size, BORDER.min_area, BORDER.min_bins))
-    grid_kw = _grid_kwargs(None, None)
+                     min_bins=field_bins(size, BORDER.min_area, BORDER.min_bins))
+    grid_kw = grid_kwargs(None, None)
 
     def info_of(raw):                                   # raw maps (..., U, ny, nx)
         shifted = raw - offset.reshape(-1, 1, 1)
@@ -213,38 +260,45 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
         grid_sh.append(shuffled_scores(smooth, grid_obs["score"], grid_kw))
         border_sh.append(stack_border_stats(smooth, offset, geo, **border_kw)["score"])
         info_sh.append(info_of(raw))
-    n_units = obs.shape[0]
-    empty = np.zeros((0, n_units))
-    cat = lambda parts: np.concatenate(parts) if parts else empty
+    empty = np.zeros((0, obs.shape[0]))
+
+    def cat(parts):
+        return np.concatenate(parts) if parts else empty
 
     columns = {
         "grid_score": (grid_obs["score"], cat(grid_sh)),
         "border_score": (border_obs["score"], cat(border_sh)),
         "spatial_information": (info_obs, cat(info_sh)),
     }
-    # ---- head direction and position x direction
-    nan = np.full(n_units, np.nan)
-    notes = {}
-    if "head_direction" in rec.variables:
-        conj = conjunctive_arrays(rec, n_shuffles=n_shuffles, seed=seed,
-                                  n_bins=CONJUNCTIVE.n_bins, n_dir=CONJUNCTIVE.n_directions,
-                                  min_speed=min_speed, extent=None)
-        for name, key in (("hd_mean_vector_length", "hd_len"),
-                          ("pxd_direction_length", "length"),
-                          ("pxd_position_information", "info")):
-            columns[name] = (conj[key][0], conj[key][1:])
-        hd_phase = conj["hd_phase"][0]
-    else:
+    spatial = {"grid": grid_obs, "border": border_obs, "fields": fields, "walls": geo,
+               "size": size, "why_offset": why_offset}
+    return maps, spatial, columns
+
+
+def _direction_columns(rec, columns, n_units, *, n_shuffles, seed, min_speed):
+    """Head-direction mean vector length and the position x direction model's factors,
+    observed and shuffled, into ``columns``; returns (preferred direction (U,), notes).
+    NaN without ``head_direction``."""
+    if "head_direction" not in rec.variables:
         for name in ("hd_mean_vector_length", "pxd_direction_length",
                      "pxd_position_information"):
-            columns[name] = (nan, np.full((n_shuffles, n_units), np.nan))
-        hd_phase = nan
-        notes["head_direction"] = "NaN: the recording has no head_direction"
-    # ---- speed
-    r, _, _, _, _ = speed_arrays(rec, n_shuffles=n_shuffles, seed=seed, sigma=SPEED.sigma,
-                                 min_speed=SPEED.min_speed, max_speed=SPEED.max_speed)
-    columns["speed_score"] = (r[:, 0], r[:, 1:].T)
+            columns[name] = (np.full(n_units, np.nan), np.full((n_shuffles, n_units), np.nan))
+        return np.full(n_units, np.nan), {
+            "head_direction": "NaN: the recording has no head_direction"}
+    conj = conjunctive_arrays(rec, n_shuffles=n_shuffles, seed=seed,
+                              n_bins=CONJUNCTIVE.n_bins, n_dir=CONJUNCTIVE.n_directions,
+                              min_speed=min_speed, extent=None)
+    for name, key in (("hd_mean_vector_length", "hd_len"),
+                      ("pxd_direction_length", "length"),
+                      ("pxd_position_information", "info")):
+        columns[name] = (conj[key][0], conj[key][1:])
+    return conj["hd_phase"][0], {}
 
+
+def _score_table(out, columns, cfg, threshold, n_shuffles, *, info_units, gated):
+    """Each score, its shuffles' threshold and p-value into ``out``; returns which units
+    are above each threshold, and above the factorial gates (``gated``: the position x
+    direction model exists, so the place and head-direction classes are gated by it)."""
     percentiles = {
         "grid_score": cfg.grid_percentile, "border_score": cfg.border_percentile,
         "spatial_information": cfg.place_percentile,
@@ -252,10 +306,6 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
         "pxd_direction_length": cfg.conjunctive_percentile,
         "pxd_position_information": cfg.conjunctive_percentile,
     }
-    coords = {k: c for k, c in maps.coords.items() if c.dims == ("unit",)}
-    out = xr.Dataset(coords=coords)
-    info_units = "bits/spike" if maps.attrs.get("units") == "Hz" else \
-        "bits per unit of activity"
     described = {
         "grid_score": ("1", "grid score"), "border_score": ("1", "border score"),
         "spatial_information": (info_units, "Skaggs spatial information"),
@@ -266,6 +316,7 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     }
     gates = {"pxd_position_information": cfg.place_percentile,
              "pxd_direction_length": cfg.hd_percentile}
+    nan = np.full(out.sizes["unit"], np.nan)
     above, gate_above = {}, {}
     for name, (observed, shuffled) in columns.items():
         units, long_name = described[name]
@@ -286,7 +337,7 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
             above[name] = np.asarray(observed) > s["threshold"]
         # the factorial gate needs the position x direction model: without head direction
         # there is none, and the place class is decided without it
-        if name in gates and cfg.factorial_gate and "head_direction" in rec.variables:
+        if name in gates and cfg.factorial_gate and gated:
             g = summarize(observed, shuffled, gates[name], threshold)["threshold"] \
                 if n_shuffles else nan
             out[f"{name}_gate_threshold"] = ("unit", g, {
@@ -295,23 +346,18 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
                 "percentile": gates[name]})
             with np.errstate(invalid="ignore"):
                 gate_above[name] = np.asarray(observed) > g
-    out["grid_spacing"] = ("unit", grid_obs["spacing"] * size, {"units": "m",
-                                                                "long_name": "grid spacing"})
-    out["grid_orientation"] = ("unit", grid_obs["orientation"], {
-        "units": "rad", "long_name": "grid orientation (axes mod 60 deg, from +x)"})
-    out["border_coverage"] = ("unit", border_obs["coverage"], {
-        "units": "1", "long_name": "largest wall coverage by one field"})
-    out["n_fields"] = ("unit", fields.count, {"units": "1",
-                                              "long_name": "number of place fields"})
-    out["hd_preferred_direction"] = ("unit", hd_phase, {"units": "rad",
-                                                        "long_name": "preferred direction"})
+    return above, gate_above
+
+
+def _assign_classes(out, above, gate_above, border_score, n_fields, cfg):
+    """Each class's membership (``is_<class>``) and the one ``cell_class`` per unit, by
+    ``cfg.precedence``, into ``out``."""
     with np.errstate(invalid="ignore"):
         gate = above["spatial_information"] if cfg.spatial_gate else True
         member = {
             "grid": above["grid_score"] & gate,
-            "border": above["border_score"] & (border_obs["score"] > cfg.border_min_score)
-            & gate,
-            "place": above["spatial_information"] & (fields.count >= 1)
+            "border": above["border_score"] & (border_score > cfg.border_min_score) & gate,
+            "place": above["spatial_information"] & (n_fields >= 1)
             & gate_above.get("pxd_position_information", True),
             "head_direction": above["hd_mean_vector_length"]
             & gate_above.get("pxd_direction_length", True),
@@ -322,21 +368,11 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
         out[f"is_{name}"] = ("unit", member[name], {
             "units": "1", "long_name": f"{name.replace('_', '-')} cell",
             "rule": _rule(name, cfg), "source": CLASSES[name][2]})
-    labels = np.full(n_units, "unclassified", dtype=object)
+    labels = np.full(out.sizes["unit"], "unclassified", dtype=object)
     for name in reversed(tuple(cfg.precedence)):
         labels[member[name]] = name
     out["cell_class"] = ("unit", labels.astype(str), {
         "long_name": "cell class", "precedence": list(cfg.precedence)})
-    attrs = _common.provenance(
-        "classify_cells", rec, n_shuffles=n_shuffles, seed=seed, threshold=threshold,
-        environment="None" if env is None else env, bin_size=size, sigma=sigma,
-        sigma_units="bins", min_speed=min_speed, rate_offset=why_offset,
-        walls_source=geo[0].source, wall_vertices=geo[0].vertices.tolist(),
-        rules={name: _rule(name, cfg) for name in CLASSES},
-        sources={name: CLASSES[name][2] for name in CLASSES}, **notes)
-    out.attrs = _common.report_nan(attrs, _common.entry_labels(out["grid_score"]),
-                                   grid_nan_reasons(grid_obs), "grid score")
-    return out
 
 
 def _rule(name, cfg):

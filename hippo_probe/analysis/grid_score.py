@@ -331,7 +331,8 @@ def grid_stats(maps, *, min_overlap, central_threshold, peak_threshold, min_orie
             "r_max": r_max}
 
 
-def _grid_kwargs(min_overlap, annulus):
+def grid_kwargs(min_overlap, annulus):
+    """The options of :func:`grid_stats` (defaults from :data:`~.config.GRID`), checked."""
     return dict(
         min_overlap=check_number("min_overlap", GRID.min_overlap if min_overlap is None
                                  else min_overlap, low=1, low_inclusive=True, integer=True),
@@ -397,7 +398,7 @@ def spatial_autocorrelation(rec_or_maps, *, min_overlap=None, bin_size=None, sig
         rec_or_maps, bin_size=bin_size, sigma=GRID.sigma if sigma is None else sigma,
         min_speed=min_speed, by=by, extent=extent)
     maps, lead = check_maps("rec_or_maps", maps)
-    min_overlap = _grid_kwargs(min_overlap, None)["min_overlap"]
+    min_overlap = grid_kwargs(min_overlap, None)["min_overlap"]
     flat, shape = flat_maps(maps.values)
     ac = autocorrelogram(flat, min_overlap)
     _, _, size = bin_coords(maps)
@@ -512,7 +513,7 @@ def grid_score(rec_or_maps, *, n_shuffles=None, seed=None, percentile=None, thre
     >>> bool(res.grid_score[0] > 1), round(float(res.grid_spacing[0]), 2)
     (True, 0.3)
     """
-    kw = _grid_kwargs(min_overlap, annulus)
+    kw = grid_kwargs(min_overlap, annulus)
     percentile = check_percentile("percentile", CELL_CLASS.grid_percentile
                                   if percentile is None else percentile)
     threshold = check_option("threshold", CELL_CLASS.threshold if threshold is None

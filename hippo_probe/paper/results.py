@@ -72,69 +72,98 @@ class Claim(NamedTuple):
 
 def rows(fig):
     """A :class:`Claim` for every quantitative claim of the study, from one run's figures
-    (``fig["fig2"]`` ... ``fig["fig5"]``: their JSON)."""
+    (``fig["fig2"]`` ... ``fig["fig5"]``: their JSON), in RESULTS.md's order."""
     f2, f3, f4, f5 = (fig.get(k, {}) for k in ("fig2", "fig3", "fig4", "fig5"))
-    n2, n3 = f2.get("n_trials"), f3.get("size", {}).get("trials")
-    slam_n = f3.get("size", {}).get("slam_trials")
+    yield _fig2_claim(f2)
+    yield _fig3a_claim(f3)
+    yield _fig3c_claim(f3)
+    yield _fig3f_claim(f3)
+    yield _fig3de_claim(f3)
+    yield _fig5c_claim(f5)
+    yield _fig5a_claim(f5)
+    yield _fig4e_claim(f4)
+    yield _fig4c_claim(f4)
+    yield _fig4ab_claim(f4)
+    yield _fig4d_claim(f4)
 
+
+def _fig2_claim(f2):
+    """Fig. 2: the localization network against the optimal particle filter."""
+    n2 = f2.get("n_trials")
     pf_loc = _get(f2, "summary", "particle filter (oracle)", "200s")
     net_loc = _get(f2, "summary", "network", "200s")
     r = _get(f2, "summary", "network / PF error, t > 100 s")
-    yield Claim("Fig. 2: the localization network is about as good as the optimal (oracular) "
-           "particle filter in its familiar arena",
-           "network ≈ PF",
-           f"network / PF error (mean over t > 100 s) = {_fmt(r)}; at 200 s: network "
-           f"{_fmt(net_loc, '.3f')} m, PF {_fmt(pf_loc, '.3f')} m ({n2} test trials)",
-           _verdict(r is not None and r <= 1.2, r is not None and r <= 2,
-                    "ratio ≤ 1.2; partly ≤ 2"),
-           {"network / PF, t > 100 s": r}, {"network / PF, t > 100 s": 1.0},
-           "Fig. 2: localization network vs the optimal PF", "error ratio")
+    return Claim("Fig. 2: the localization network is about as good as the optimal (oracular) "
+            "particle filter in its familiar arena",
+            "network ≈ PF",
+            f"network / PF error (mean over t > 100 s) = {_fmt(r)}; at 200 s: network "
+            f"{_fmt(net_loc, '.3f')} m, PF {_fmt(pf_loc, '.3f')} m ({n2} test trials)",
+            _verdict(r is not None and r <= 1.2, r is not None and r <= 2,
+                     "ratio ≤ 1.2; partly ≤ 2"),
+            {"network / PF, t > 100 s": r}, {"network / PF, t > 100 s": 1.0},
+            "Fig. 2: localization network vs the optimal PF", "error ratio")
 
+
+def _fig3a_claim(f3):
+    """Fig. 3A: the generalized network in novel arenas."""
+    n3 = f3.get("size", {}).get("trials")
     gen = _get(f3, "A_generalized_error") or {}
     r = _get(f3, "A_ratio_network_to_pf_t_gt_100s")
     net_200 = (gen.get("network") or [None])[-1]
     pi_200 = (gen.get("path integration") or [None])[-1]
     beats_pi = None if net_200 is None or pi_200 is None else net_200 < 0.75 * pi_200
-    yield Claim("Fig. 3A: in novel arenas the generalized network is within ~1.5x of the "
-           "oracular PF and far better than path integration",
-           "≈ 1.5x PF (read from the main text); << PI",
-           f"network / PF error (t > 100 s) = {_fmt(r)}; at 200 s: network "
-           f"{_fmt(net_200, '.3f')} m, PF "
-           f"{_fmt((gen.get('particle filter (oracle)') or [None])[-1], '.3f')} m, PI "
-           f"{_fmt(pi_200, '.3f')} m, naive Bayes "
-           f"{_fmt((gen.get('naive Bayes') or [None])[-1], '.3f')} m ({n3} trials)",
-           _verdict(bool(beats_pi) and r is not None and r <= 2, bool(beats_pi),
-                    "ratio ≤ 2 and error < 0.75 PI at 200 s; partly: only the latter"),
-           {"network / PF, t > 100 s": r, "network / PI, 200 s": _ratio(net_200, pi_200)},
-           {"network / PF, t > 100 s": 1.5},
-           "Fig. 3A: generalized network, novel arenas", "error ratio")
+    return Claim("Fig. 3A: in novel arenas the generalized network is within ~1.5x of the "
+            "oracular PF and far better than path integration",
+            "≈ 1.5x PF (read from the main text); << PI",
+            f"network / PF error (t > 100 s) = {_fmt(r)}; at 200 s: network "
+            f"{_fmt(net_200, '.3f')} m, PF "
+            f"{_fmt((gen.get('particle filter (oracle)') or [None])[-1], '.3f')} m, PI "
+            f"{_fmt(pi_200, '.3f')} m, naive Bayes "
+            f"{_fmt((gen.get('naive Bayes') or [None])[-1], '.3f')} m ({n3} trials)",
+            _verdict(bool(beats_pi) and r is not None and r <= 2, bool(beats_pi),
+                     "ratio ≤ 2 and error < 0.75 PI at 200 s; partly: only the latter"),
+            {"network / PF, t > 100 s": r, "network / PI, 200 s": _ratio(net_200, pi_200)},
+            {"network / PF, t > 100 s": 1.5},
+            "Fig. 3A: generalized network, novel arenas", "error ratio")
 
+
+def _fig3c_claim(f3):
+    """Fig. 3C: the specialized network names its arena."""
+    n3 = f3.get("size", {}).get("trials")
     acc = _get(f3, "C_accuracy_at") or {}
     a200 = acc.get("200s")
-    yield Claim("Fig. 3C: the specialized network identifies its arena (of 100) with accuracy "
-           "near 100% within 200 s",
-           "≈ 100% by 200 s",
-           "accuracy at 50/100/200 s = " + (", ".join(_fmt(v, ".3f") for v in acc.values())
-                                             if acc else "n/a") + f" (chance 0.01; {n3} trials)",
-           _verdict(a200 is not None and a200 >= 0.9, a200 is not None and a200 >= 0.5,
-                    "≥ 0.9 at 200 s; partly ≥ 0.5"),
-           {"accuracy, 200 s": a200}, {"accuracy, 200 s": 1.0},
-           "Fig. 3C: specialized network names its arena",
-           "classification accuracy (chance 0.01)")
+    return Claim("Fig. 3C: the specialized network identifies its arena (of 100) with accuracy "
+            "near 100% within 200 s",
+            "≈ 100% by 200 s",
+            "accuracy at 50/100/200 s = " + (", ".join(_fmt(v, ".3f") for v in acc.values())
+                                              if acc else "n/a") + f" (chance 0.01; {n3} trials)",
+            _verdict(a200 is not None and a200 >= 0.9, a200 is not None and a200 >= 0.5,
+                     "≥ 0.9 at 200 s; partly ≥ 0.5"),
+            {"accuracy, 200 s": a200}, {"accuracy, 200 s": 1.0},
+            "Fig. 3C: specialized network names its arena",
+            "classification accuracy (chance 0.01)")
 
+
+def _fig3f_claim(f3):
+    """Fig. 3F: the retrained readout of the frozen generalized network."""
+    n3 = f3.get("size", {}).get("trials")
     ro = _get(f3, "F_readout_accuracy_at") or {}
     r200 = ro.get("200s")
-    yield Claim("Fig. 3F: retraining only the readout of the generalized network classifies "
-           "the arenas at about 85%",
-           "≈ 85%",
-           "accuracy at 50/100/200 s = " + (", ".join(_fmt(v) for v in ro.values())
-                                             if ro else "n/a") + f" ({n3} trials)",
-           _verdict(r200 is not None and r200 >= 0.7, r200 is not None and r200 >= 0.3,
-                    "≥ 0.7 at 200 s; partly ≥ 0.3"),
-           {"accuracy, 200 s": r200}, {"accuracy, 200 s": 0.85},
-           "Fig. 3F: generalized network, retrained readout",
-           "classification accuracy (chance 0.01)")
+    return Claim("Fig. 3F: retraining only the readout of the generalized network classifies "
+            "the arenas at about 85%",
+            "≈ 85%",
+            "accuracy at 50/100/200 s = " + (", ".join(_fmt(v) for v in ro.values())
+                                              if ro else "n/a") + f" ({n3} trials)",
+            _verdict(r200 is not None and r200 >= 0.7, r200 is not None and r200 >= 0.3,
+                     "≥ 0.7 at 200 s; partly ≥ 0.3"),
+            {"accuracy, 200 s": r200}, {"accuracy, 200 s": 0.85},
+            "Fig. 3F: generalized network, retrained readout",
+            "classification accuracy (chance 0.01)")
 
+
+def _fig3de_claim(f3):
+    """Fig. 3D-E: the specialized network against PF-SLAM."""
+    slam_n = f3.get("size", {}).get("slam_trials")
     slam = sorted((int(k.split("_")[2]), v) for k, v in f3.items()
                   if k.startswith("E_pfslam_"))
     slam_err = {int(k.split("_")[2]): v for k, v in f3.items() if k.startswith("D_pfslam_")}
@@ -147,25 +176,28 @@ def rows(fig):
     top = _get(f3, f"last20s_pfslam_{slam[-1][0]}") if slam else None
     acc_ok = bool(net and top) and net["accuracy"] >= 0.8 * top["accuracy"]
     err_ok = bool(net and top) and net["error"] <= 1.25 * top["error"]
-    yield Claim("Fig. 3D-E: the specialized network is comparable to a PF-SLAM with 10,000 "
-           "particles",
-           "≈ PF-SLAM 10k",
-           f"mean over 180-200 s, on {slam_n} trials — network: accuracy "
-           f"{_fmt(net.get('accuracy'))}, error {_fmt(net.get('error'), '.3f')} m; "
-           f"PF-SLAM 10k: accuracy {_fmt((top or {}).get('accuracy'))}, error "
-           f"{_fmt((top or {}).get('error'), '.3f')} m. At 200 s: PF-SLAM {slam_txt or 'n/a'}",
-           _verdict(acc_ok and err_ok, acc_ok or err_ok,
-                    "accuracy ≥ 0.8 × and error ≤ 1.25 × PF-SLAM 10k's; partly: one of "
-                    "the two"),
-           # accuracy as a difference: PF-SLAM's accuracy may be 0 (few particles for 100
-           # arenas in darkness), where a ratio is undefined; errors are never 0
-           {"accuracy − PF-SLAM's": _difference(net.get("accuracy"),
-                                                (top or {}).get("accuracy")),
-            "error / PF-SLAM's": _ratio(net.get("error"), (top or {}).get("error"))},
-           {"accuracy − PF-SLAM's": 0.0, "error / PF-SLAM's": 1.0},
-           "Fig. 3D-E: specialized network vs PF-SLAM 10k",
-           "accuracy difference; error ratio")
+    return Claim("Fig. 3D-E: the specialized network is comparable to a PF-SLAM with 10,000 "
+            "particles",
+            "≈ PF-SLAM 10k",
+            f"mean over 180-200 s, on {slam_n} trials — network: accuracy "
+            f"{_fmt(net.get('accuracy'))}, error {_fmt(net.get('error'), '.3f')} m; "
+            f"PF-SLAM 10k: accuracy {_fmt((top or {}).get('accuracy'))}, error "
+            f"{_fmt((top or {}).get('error'), '.3f')} m. At 200 s: PF-SLAM {slam_txt or 'n/a'}",
+            _verdict(acc_ok and err_ok, acc_ok or err_ok,
+                     "accuracy ≥ 0.8 × and error ≤ 1.25 × PF-SLAM 10k's; partly: one of "
+                     "the two"),
+            # accuracy as a difference: PF-SLAM's accuracy may be 0 (few particles for 100
+            # arenas in darkness), where a ratio is undefined; errors are never 0
+            {"accuracy − PF-SLAM's": _difference(net.get("accuracy"),
+                                                 (top or {}).get("accuracy")),
+             "error / PF-SLAM's": _ratio(net.get("error"), (top or {}).get("error"))},
+            {"accuracy − PF-SLAM's": 0.0, "error / PF-SLAM's": 1.0},
+            "Fig. 3D-E: specialized network vs PF-SLAM 10k",
+            "accuracy difference; error ratio")
 
+
+def _fig5c_claim(f5):
+    """Fig. 5C: the correlation dimension of the hidden states."""
     measured = _get(f5, "C_dimension") or {}
     dims = {k: v for k, v in measured.items() if v is not None}
     # D is None where C(r) has no scaling range: the local slope never plateaus
@@ -179,78 +211,94 @@ def rows(fig):
     ordered = complete and max(dims, key=dims.get) == max(paper, key=paper.get)
     n_dim = min((_get(f5, "C_n_points") or {}).values(), default=None)
     bound = 2 * math.log10(n_dim) if n_dim else None
-    yield Claim("Fig. 5C: correlation dimension of the hidden-state trajectories",
-           "5.5 / 5.6 / 8.5 (localization / specialized / generalized, the study's text)",
-           (" / ".join(f"{k} {_fmt(v, '.1f')}" if v is not None else
-                       f"{k}: no scaling range (the local slope never plateaus)"
-                       for k, v in measured.items()) or "n/a")
-           + (f" ({n_dim:,} states each; values near 2 log10 N = {bound:.1f} "
-              "(Eckmann & Ruelle 1992) are lower bounds)" if bound else "")
-           + "".join(f"; {e} (same states): " + " / ".join(
-               f"{k} {_fmt(v, '.1f')}" for k, v in (_get(f5, f"C_dimension_{e}") or {}).items())
-               for e in ("TwoNN", "MLE") if _get(f5, f"C_dimension_{e}")),
-           _verdict(bool(close) and all(close), ordered,
-                    "each within 20%; partly: the generalized network highest"),
-           {f"D {k}": dims.get(k) for k in paper}, {f"D {k}": v for k, v in paper.items()},
-           "Fig. 5C: correlation dimension of hidden states",
-           "dimension D (Grassberger-Procaccia)")
+    return Claim("Fig. 5C: correlation dimension of the hidden-state trajectories",
+            "5.5 / 5.6 / 8.5 (localization / specialized / generalized, the study's text)",
+            (" / ".join(f"{k} {_fmt(v, '.1f')}" if v is not None else
+                        f"{k}: no scaling range (the local slope never plateaus)"
+                        for k, v in measured.items()) or "n/a")
+            + (f" ({n_dim:,} states each; values near 2 log10 N = {bound:.1f} "
+               "(Eckmann & Ruelle 1992) are lower bounds)" if bound else "")
+            + "".join(f"; {e} (same states): " + " / ".join(
+                f"{k} {_fmt(v, '.1f')}" for k, v in (_get(f5, f"C_dimension_{e}") or {}).items())
+                for e in ("TwoNN", "MLE") if _get(f5, f"C_dimension_{e}")),
+            _verdict(bool(close) and all(close), ordered,
+                     "each within 20%; partly: the generalized network highest"),
+            {f"D {k}": dims.get(k) for k in paper}, {f"D {k}": v for k, v in paper.items()},
+            "Fig. 5C: correlation dimension of hidden states",
+            "dimension D (Grassberger-Procaccia)")
 
+
+def _fig5a_claim(f5):
+    """Fig. 5A: the particle filter's covariance decoded from the units."""
     r2 = _get(f5, "A_r2") or {}
     r2_t = _get(f5, "A_r2_time_in_trial_alone") or {}
     gain = [r2[k] - r2_t.get(k, 0.0) for k in ("xx", "yy") if k in r2]
-    yield Claim("Fig. 5A: the PF's posterior covariance is linearly decodable from the "
-           "localization network's units",
-           "decodable",
-           "cross-validated R² (xx, yy, xy) = " + ", ".join(_fmt(v) for v in r2.values())
-           + ("; from time in trial alone: " + ", ".join(_fmt(v) for v in r2_t.values())
-              if r2_t else ""),
-           _verdict(bool(gain) and min(r2.get("xx", 0), r2.get("yy", 0)) >= 0.5
-                    and min(gain) >= 0.1,
-                    any(r2[k] - r2_t.get(k, 0.0) >= 0.05 for k in r2),
-                    "R² ≥ 0.5 for xx and yy, ≥ 0.1 above time in trial alone; partly: "
-                    "≥ 0.05 above it for one component"),
-           {f"R² {k} − time alone": r2[k] - r2_t.get(k, 0.0) if k in r2 else None
-            for k in ("xx", "yy", "xy")}, {},
-           "Fig. 5A: PF covariance decoded from units", "cross-validated R² gain")
+    return Claim("Fig. 5A: the PF's posterior covariance is linearly decodable from the "
+            "localization network's units",
+            "decodable",
+            "cross-validated R² (xx, yy, xy) = " + ", ".join(_fmt(v) for v in r2.values())
+            + ("; from time in trial alone: " + ", ".join(_fmt(v) for v in r2_t.values())
+               if r2_t else ""),
+            _verdict(bool(gain) and min(r2.get("xx", 0), r2.get("yy", 0)) >= 0.5
+                     and min(gain) >= 0.1,
+                     any(r2[k] - r2_t.get(k, 0.0) >= 0.05 for k in r2),
+                     "R² ≥ 0.5 for xx and yy, ≥ 0.1 above time in trial alone; partly: "
+                     "≥ 0.05 above it for one component"),
+            {f"R² {k} − time alone": r2[k] - r2_t.get(k, 0.0) if k in r2 else None
+             for k in ("xx", "yy", "xy")}, {},
+            "Fig. 5A: PF covariance decoded from units", "cross-validated R² gain")
 
+
+def _fig4e_claim(f4):
+    """Fig. 4E: classifier weight against spatial selectivity."""
     rho, p = _get(f4, "E", "rank_correlation"), _get(f4, "E", "rank_correlation_p")
-    yield Claim("Fig. 4E: units projecting strongly onto the classifier are less spatially "
-           "selective (negative correlation)",
-           "negative",
-           f"Spearman rho = {_fmt(rho)} (p = {_fmt(p, '.2g')})",
-           _verdict(rho is not None and rho < 0 and p is not None and p < 0.05,
-                    rho is not None and rho < 0, "rho < 0 with p < 0.05; partly: rho < 0"),
-           {"Spearman rho": rho}, {},
-           "Fig. 4E: classifier weight vs spatial selectivity", "Spearman ρ")
+    return Claim("Fig. 4E: units projecting strongly onto the classifier are less spatially "
+            "selective (negative correlation)",
+            "negative",
+            f"Spearman rho = {_fmt(rho)} (p = {_fmt(p, '.2g')})",
+            _verdict(rho is not None and rho < 0 and p is not None and p < 0.05,
+                     rho is not None and rho < 0, "rho < 0 with p < 0.05; partly: rho < 0"),
+            {"Spearman rho": rho}, {},
+            "Fig. 4E: classifier weight vs spatial selectivity", "Spearman ρ")
 
+
+def _fig4c_claim(f4):
+    """Fig. 4C: head-direction tuning."""
     mvl = _get(f4, "C_mean_vector_length", "median_all_units")
     sig = _get(f4, "C_mean_vector_length", "fraction_significant_p_lt_0.01")
-    yield Claim("Fig. 4C: head-direction tuning is weak",
-           "weak",
-           f"specialized network: median mean vector length {_fmt(mvl)}, max "
-           f"{_fmt(_get(f4, 'C_mean_vector_length', 'max'))}; "
-           f"{_fmt(sig)} of units significant (p < 0.01, time-shift shuffles): tuned, "
-           "but weakly (mouse ADn cells: median R 0.84, see the network-vs-rodent table)",
-           _verdict(mvl is not None and mvl < 0.2, rule="median R < 0.2"),
-           {"median R": mvl}, {},
-           "Fig. 4C: head-direction tuning", "median mean vector length R")
+    return Claim("Fig. 4C: head-direction tuning is weak",
+            "weak",
+            f"specialized network: median mean vector length {_fmt(mvl)}, max "
+            f"{_fmt(_get(f4, 'C_mean_vector_length', 'max'))}; "
+            f"{_fmt(sig)} of units significant (p < 0.01, time-shift shuffles): tuned, "
+            "but weakly (mouse ADn cells: median R 0.84, see the network-vs-rodent table)",
+            _verdict(mvl is not None and mvl < 0.2, rule="median R < 0.2"),
+            {"median R": mvl}, {},
+            "Fig. 4C: head-direction tuning", "median mean vector length R")
 
+
+def _fig4ab_claim(f4):
+    """Fig. 4A-B: rate-map stability within an arena."""
     same_a, same_b = (_get(f4, k, "stability_same_arena_median") for k in "AB")
     across_a, across_b = (_get(f4, k, "correlation_across_arenas_median") for k in "AB")
-    yield Claim("Fig. 4A-B: place fields are stable across trajectories in the same arena",
-           "stable",
-           f"median rate-map correlation, same arena vs other arena: specialized "
-           f"{_fmt(same_a)} vs {_fmt(across_a)}, generalized {_fmt(same_b)} vs "
-           f"{_fmt(across_b)}",
-           _verdict(same_a is not None and same_a >= 0.7 and (same_b or 0) >= 0.7
-                    and across_a is not None and same_a - across_a >= 0.1,
-                    same_a is not None and same_a >= 0.7,
-                    "same-arena median ≥ 0.7 and ≥ 0.1 above the other arena's for the "
-                    "specialized network; partly: stable only. Smooth gradient-like maps "
-                    "are stable trivially (notes)"),
-           {"same arena": same_a, "other arena": across_a}, {},
-           "Fig. 4A-B: rate-map stability (specialized)", "median rate-map correlation")
+    return Claim("Fig. 4A-B: place fields are stable across trajectories in the same arena",
+            "stable",
+            f"median rate-map correlation, same arena vs other arena: specialized "
+            f"{_fmt(same_a)} vs {_fmt(across_a)}, generalized {_fmt(same_b)} vs "
+            f"{_fmt(across_b)}",
+            _verdict(same_a is not None and same_a >= 0.7 and (same_b or 0) >= 0.7
+                     and across_a is not None and same_a - across_a >= 0.1,
+                     same_a is not None and same_a >= 0.7,
+                     "same-arena median ≥ 0.7 and ≥ 0.1 above the other arena's for the "
+                     "specialized network; partly: stable only. Smooth gradient-like maps "
+                     "are stable trivially (notes)"),
+            {"same arena": same_a, "other arena": across_a}, {},
+            "Fig. 4A-B: rate-map stability (specialized)", "median rate-map correlation")
 
+
+def _fig4d_claim(f4):
+    """Fig. 4D: remapping between arenas."""
+    across_a = _get(f4, "A", "correlation_across_arenas_median")
     d = _get(f4, "D_similarity") or {}
     dc = _get(f4, "D_similarity_units_centred") or {}
     within, across = dc.get("same"), dc.get("different")
@@ -258,19 +306,19 @@ def rows(fig):
     # vectors: the per-unit rate-map correlation across arenas (Fig. 4A) must be low too
     pv_ok = across is not None and within is not None and across < 0.3 and within > 0.7
     maps_ok = across_a is not None and across_a < 0.5
-    yield Claim("Fig. 4D: global remapping between arenas",
-           "across ≈ 0, within high",
-           f"mean population-vector correlation, each unit's mean removed: within "
-           f"{_fmt(within)}, across {_fmt(across)} (labels shuffled: "
-           f"{_fmt(dc.get('same_permuted'))} / {_fmt(dc.get('different_permuted'))}); "
-           f"pooled without centring: {_fmt(d.get('same'))} / {_fmt(d.get('different'))}; "
-           f"but single units' rate maps across arenas correlate {_fmt(across_a)} (median)",
-           _verdict(pv_ok and maps_ok, pv_ok,
-                    "population vectors across < 0.3 and within > 0.7, and units' maps "
-                    "across arenas < 0.5; partly: population vectors only, i.e. rate "
-                    "remapping (units change their mean rate by arena, keep their map)"),
-           {"PV across": across, "maps across": across_a}, {},
-           "Fig. 4D: remapping between arenas", "correlation across arenas")
+    return Claim("Fig. 4D: global remapping between arenas",
+            "across ≈ 0, within high",
+            f"mean population-vector correlation, each unit's mean removed: within "
+            f"{_fmt(within)}, across {_fmt(across)} (labels shuffled: "
+            f"{_fmt(dc.get('same_permuted'))} / {_fmt(dc.get('different_permuted'))}); "
+            f"pooled without centring: {_fmt(d.get('same'))} / {_fmt(d.get('different'))}; "
+            f"but single units' rate maps across arenas correlate {_fmt(across_a)} (median)",
+            _verdict(pv_ok and maps_ok, pv_ok,
+                     "population vectors across < 0.3 and within > 0.7, and units' maps "
+                     "across arenas < 0.5; partly: population vectors only, i.e. rate "
+                     "remapping (units change their mean rate by arena, keep their map)"),
+            {"PV across": across, "maps across": across_a}, {},
+            "Fig. 4D: remapping between arenas", "correlation across arenas")
 
 
 def error_table(figs):

@@ -413,20 +413,8 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
     opt = torch.optim.Adam(params, lr=config.lr)
     validation = make_trials(config.task, config.n_validation, "validation", config.seed,
                              world=config.world) if rank == 0 else None
-    classify = net.classifier is not None
     classifier_only = config.train_only == "classifier"
-    if classifier_only:
-        class_weight = 1.0            # the loss is the cross-entropy alone
-    elif config.class_weight is not None:
-        class_weight = config.class_weight
-    elif classify:
-        target = make_trials(config.task, config.n_validation, "validation",
-                             config.seed, world=config.world).target if validation is None else \
-            validation.target
-        class_weight = class_weight_rule(_position_cost_at_chance(net, target),
-                                         net.config.n_classes)
-    else:
-        class_weight = 0.0
+    class_weight = _class_weight(config, net, validation)
 
     ckpt_path = run_dir / "checkpoint.pt"
     log = {"config": config.to_dict(), "n_trials": n_trials, "class_weight": class_weight,
@@ -437,23 +425,7 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
            "validation": [], "wall_time_s": 0.0}
     step, best_loss, best_state = 0, math.inf, None
     if ckpt_path.exists():
-        ckpt = require(load(ckpt_path), ("config", "model", "optimizer", "step", "best_loss",
-                                         "best_model", "log"), ckpt_path, "resume training")
-        diff = TrainConfig.from_dict(ckpt["config"]).differences(config)
-        if diff:
-            listed = "; ".join(f"{k}: checkpoint {a!r}, got {b!r}" for k, a, b in
-                               ((k, *v) for k, v in diff.items()))
-            raise ValueError(f"`run_dir` {str(run_dir)!r} holds a checkpoint of another "
-                             f"configuration ({listed}); use a new directory")
-        load_into(net, ckpt["model"], ckpt_path)
-        load_into(opt, ckpt["optimizer"], ckpt_path)
-        step, best_loss, best_state = ckpt["step"], ckpt["best_loss"], ckpt["best_model"]
-        log = ckpt["log"]
-        log.setdefault("resumed_at", []).append(step)
-        # a run resumed after it ended (by a stopping rule) is tested and stopped anew;
-        # the old verdict and test results must not outlive the training they describe
-        for key in ("stopped", "test", "test_curves", "best_validation_loss"):
-            log.pop(key, None)
+        step, best_loss, best_state, log = _resume(ckpt_path, config, net, opt)
     # the precision of each stretch of trained steps; a stretch starts at its first
     # trained step, so a finished run re-tested on other hardware gains none
     segments = log.setdefault("precision_from_step",
@@ -573,11 +545,7 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
             validate()
         last_state = {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}
         net.load_state_dict(best_state)
-        test = make_trials(config.task, config.n_test, "test", config.seed, world=config.world)
-        metrics = evaluate_network(net, test, class_weight)
-        log["test"] = summarize(metrics, test.dt)
-        log["test_curves"] = {k: v.tolist() for k, v in metrics.items()
-                              if isinstance(v, np.ndarray)}
+        _test(net, config, class_weight, log)
         log["best_validation_loss"] = best_loss
         checkpoint(last_state)        # the checkpoint keeps the last parameters
         save_network(net, trained_config(), log, run_dir / "network.pt")
@@ -585,6 +553,52 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
     if world_size > 1:
         torch.distributed.barrier()
     return log
+
+
+def _class_weight(config, net, validation) -> float:
+    """The arena cross-entropy's weight in the loss: 1 when only the classifier trains,
+    the configured one, or :func:`class_weight_rule`'s (0 without a classifier)."""
+    if config.train_only == "classifier":
+        return 1.0                    # the loss is the cross-entropy alone
+    if config.class_weight is not None:
+        return config.class_weight
+    if net.classifier is None:
+        return 0.0
+    target = validation.target if validation is not None else make_trials(
+        config.task, config.n_validation, "validation", config.seed,
+        world=config.world).target
+    return class_weight_rule(_position_cost_at_chance(net, target), net.config.n_classes)
+
+
+def _resume(ckpt_path, config, net, opt):
+    """Load a run's checkpoint into ``net`` and ``opt``; return (step, best loss, best
+    parameters, log). Refused if it is of another configuration."""
+    ckpt = require(load(ckpt_path), ("config", "model", "optimizer", "step", "best_loss",
+                                     "best_model", "log"), ckpt_path, "resume training")
+    diff = TrainConfig.from_dict(ckpt["config"]).differences(config)
+    if diff:
+        listed = "; ".join(f"{k}: checkpoint {a!r}, got {b!r}" for k, a, b in
+                           ((k, *v) for k, v in diff.items()))
+        raise ValueError(f"`run_dir` {str(ckpt_path.parent)!r} holds a checkpoint of another "
+                         f"configuration ({listed}); use a new directory")
+    load_into(net, ckpt["model"], ckpt_path)
+    load_into(opt, ckpt["optimizer"], ckpt_path)
+    log = ckpt["log"]
+    log.setdefault("resumed_at", []).append(ckpt["step"])
+    # a run resumed after it ended (by a stopping rule) is tested and stopped anew; the
+    # old verdict and test results must not outlive the training they describe
+    for key in ("stopped", "test", "test_curves", "best_validation_loss"):
+        log.pop(key, None)
+    return ckpt["step"], ckpt["best_loss"], ckpt["best_model"], log
+
+
+def _test(net, config, class_weight, log) -> None:
+    """The test split's errors (and accuracy) of ``net`` into ``log``."""
+    test = make_trials(config.task, config.n_test, "test", config.seed, world=config.world)
+    metrics = evaluate_network(net, test, class_weight)
+    log["test"] = summarize(metrics, test.dt)
+    log["test_curves"] = {k: v.tolist() for k, v in metrics.items()
+                          if isinstance(v, np.ndarray)}
 
 
 def save_network(net, config: TrainConfig, log: dict, path) -> None:

@@ -103,6 +103,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections import namedtuple
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
@@ -114,6 +115,24 @@ from ._common import (BaselineResult, provenance, resolve_start, resolve_task,
                       start_prior_samples)
 from .config import STREAM_TAGS, BaselineConfig
 from .contact import ContactModel, Observations, towards, wall_table, wall_terms
+
+
+# The kernel's arguments, grouped and read by name (a swapped argument cannot pass).
+#: One trial's initial particles: positions, their start, heading drift, arena hypothesis.
+Particles = namedtuple("Particles", "x y sx sy eta arena")
+#: One trial's self-motion and contact observations, per step.
+TrialObservations = namedtuple(
+    "TrialObservations", "displacement heading turn contact distance angle path_length")
+#: The filter's model of the world and its own settings.
+FilterModel = namedtuple(
+    "FilterModel", "n_checks speed_sd rotation_sd drift_step_sd resample_threshold "
+                   "contact_args heading_sd touch_range min_clearance outlier_p "
+                   "outlier_density outlier_reach floor proposals regularization relative "
+                   "class_output")
+#: Where one trial's estimates and particle snapshots are written.
+TrialOutputs = namedtuple(
+    "TrialOutputs", "snapshot_of_step estimate mean cov drift classes snap_xy snap_w "
+                    "snap_eta snap_arena")
 
 
 def particle_filter(batch, n_particles: int | None = None, *, start: str | None = None,
@@ -233,6 +252,16 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
     clearance = config.world.sensors.touch_range
     floor = int(pf.arena_floor * n_particles / n_arenas) if n_arenas > 1 else 0
 
+    kernel_model = FilterModel(
+        n_checks=pf.intermediate_checks, speed_sd=noise.speed_sd,
+        rotation_sd=noise.rotation_sd, drift_step_sd=drift_step_sd,
+        resample_threshold=pf.resample_threshold, contact_args=model.kernel_args(),
+        heading_sd=model.heading_sd, touch_range=model.touch_range,
+        min_clearance=model.min_clearance, outlier_p=model.outlier_probability,
+        outlier_density=model.outlier_density, outlier_reach=model.outlier_reach,
+        floor=floor, proposals=pf.contact_proposals, regularization=float(regularization),
+        relative=relative, class_output=class_output)
+
     def one(b):
         rng = np.random.default_rng(np.random.SeedSequence(
             [int(batch.seed), STREAM_TAGS[stream], int(batch.trial_index[b])]))
@@ -243,15 +272,17 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
         x, y = np.ascontiguousarray(x0[:, 0]), np.ascontiguousarray(x0[:, 1])
         eta = np.zeros(n_particles) if oriented else rng.uniform(-np.pi, np.pi, n_particles)
         counts[b] = _filter_trial(
-            rng, x, y, x.copy(), y.copy(), eta, arena.copy(), tables[table_of_trial[b]],
-            obs.displacement[b], obs.heading[b], obs.turn[b], obs.contact[b], obs.distance[b],
-            obs.angle[b], obs.path_length[b], pf.intermediate_checks, noise.speed_sd,
-            noise.rotation_sd, drift_step_sd, pf.resample_threshold, model.kernel_args(),
-            model.heading_sd, model.touch_range, model.min_clearance,
-            model.outlier_probability, model.outlier_density, model.outlier_reach, floor,
-            pf.contact_proposals, float(regularization), relative, class_output,
-            snapshot_of_step, estimate[b], mean[b], cov[b], drift[b], classes[b], snap_xy[b],
-            snap_w[b], snap_eta[b], snap_arena[b])
+            rng, Particles(x=x, y=y, sx=x.copy(), sy=y.copy(), eta=eta, arena=arena.copy()),
+            tables[table_of_trial[b]],
+            TrialObservations(displacement=obs.displacement[b], heading=obs.heading[b],
+                              turn=obs.turn[b], contact=obs.contact[b],
+                              distance=obs.distance[b], angle=obs.angle[b],
+                              path_length=obs.path_length[b]),
+            kernel_model,
+            TrialOutputs(snapshot_of_step=snapshot_of_step, estimate=estimate[b],
+                         mean=mean[b], cov=cov[b], drift=drift[b], classes=classes[b],
+                         snap_xy=snap_xy[b], snap_w=snap_w[b], snap_eta=snap_eta[b],
+                         snap_arena=snap_arena[b]))
 
     if threads == 1 or n_trials == 1:
         for b in range(n_trials):
@@ -321,21 +352,34 @@ def _nearest_walls(walls, x, y, best, nearest, crossings):
 
 
 @numba.njit(cache=True, nogil=True)
-def _filter_trial(rng, x, y, sx, sy, eta, arena, walls, disp, heading, turn, contact,
-                  distance, angle, path_length, n_checks, speed_sd, rotation_sd,
-                  drift_step_sd, resample_threshold, contact_args, heading_sd, touch_range,
-                  min_clearance, outlier_p, outlier_density, outlier_reach, floor, proposals,
-                  regularization, relative, class_output, snapshot_of_step, out_estimate,
-                  out_mean, out_cov, out_drift, out_class, snap_xy, snap_w, snap_eta,
-                  snap_arena):
-    """One trial of the particle filter (module docstring, steps 1-4). Particles (``x, y``,
-    their start ``sx, sy``, heading drift ``eta`` and arena hypothesis ``arena``, sorted)
-    are the initial ones; returns (number of skipped observations, number of
+def _filter_trial(rng, particles, walls, obs, model, outputs):
+    """One trial of the particle filter (module docstring, steps 1-4). ``particles``
+    (:data:`Particles`: ``x, y``, their start ``sx, sy``, heading drift ``eta`` and arena
+    hypothesis ``arena``, sorted by arena) are the initial ones, ``obs`` the trial's
+    :data:`TrialObservations`, ``model`` the :data:`FilterModel`; the estimates go into
+    ``outputs`` (:data:`TrialOutputs`). Returns (number of skipped observations, number of
     resamplings).
 
     At a contact step with ``proposals`` = m > 1, each particle first splits into m
     children of weight w/m that move independently; the step's estimate uses all of them
     and resampling returns to ``n`` particles (snapshots are then taken after it)."""
+    x, y, sx, sy, eta, arena = (particles.x, particles.y, particles.sx, particles.sy,
+                                particles.eta, particles.arena)
+    disp, heading, turn, contact = obs.displacement, obs.heading, obs.turn, obs.contact
+    distance, angle, path_length = obs.distance, obs.angle, obs.path_length
+    n_checks, speed_sd, rotation_sd = model.n_checks, model.speed_sd, model.rotation_sd
+    drift_step_sd, resample_threshold = model.drift_step_sd, model.resample_threshold
+    contact_args, heading_sd, touch_range = (model.contact_args, model.heading_sd,
+                                             model.touch_range)
+    min_clearance, outlier_p = model.min_clearance, model.outlier_p
+    outlier_density, outlier_reach = model.outlier_density, model.outlier_reach
+    floor, proposals, regularization = model.floor, model.proposals, model.regularization
+    relative, class_output = model.relative, model.class_output
+    snapshot_of_step = outputs.snapshot_of_step
+    out_estimate, out_mean, out_cov = outputs.estimate, outputs.mean, outputs.cov
+    out_drift, out_class = outputs.drift, outputs.classes
+    snap_xy, snap_w = outputs.snap_xy, outputs.snap_w
+    snap_eta, snap_arena = outputs.snap_eta, outputs.snap_arena
     n = x.size
     cap = n * proposals
     n_arenas = walls.shape[0]

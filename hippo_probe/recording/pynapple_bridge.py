@@ -175,6 +175,25 @@ def to_pynapple(rec, *, activity_as="auto"):
     if activity_as == "auto":
         activity_as = ("tsgroup" if rec.attrs["activity_kind"] == "spike_count"
                        else "tsdframe")
+    trials, support = _trials_to_pynapple(nap, rec)
+    time = np.asarray(rec["time"].values, dtype=float)
+    activity = _activity_to_pynapple(nap, rec, time, support, activity_as)
+    position = nap.TsdFrame(
+        t=time, d=np.asarray(rec["position"].sel(space=["x", "y"])
+                             .transpose("time", "space").values, dtype=float),
+        columns=["x", "y"], time_support=support)
+    head_direction = None
+    if "head_direction" in rec:
+        head_direction = nap.Tsd(t=time, d=np.asarray(rec["head_direction"].values),
+                                 time_support=support)
+    return {"activity": activity, "position": position, "head_direction": head_direction,
+            "trials": trials, "time_support": support,
+            "variables": _variables_to_pynapple(nap, rec, time, support),
+            "attrs": dict(rec.attrs)}
+
+
+def _trials_to_pynapple(nap, rec):
+    """The trials as an ``IntervalSet`` with their metadata, and the bare time support."""
     starts = np.asarray(rec["trial_start"].values, dtype=float)
     stops = np.asarray(rec["trial_stop"].values, dtype=float)
     trial_ids = np.asarray(rec["trial_id"].values)
@@ -198,36 +217,32 @@ def to_pynapple(rec, *, activity_as="auto"):
                 raise RecordingError(f"`rec.{name}` (along trial_id) clashes with the "
                                      f"trials metadata {sorted(meta)}; rename it first")
             meta[name] = np.asarray(var.values)
-    trials = nap.IntervalSet(start=starts, end=stops, metadata=meta)
+    return nap.IntervalSet(start=starts, end=stops, metadata=meta), support
 
-    time = np.asarray(rec["time"].values, dtype=float)
+
+def _activity_to_pynapple(nap, rec, time, support, activity_as):
+    """The activity as a ``TsdFrame`` or, rebuilt as spike times, a ``TsGroup``."""
     ids, unit_coords = _unit_table(rec)
     values = np.asarray(rec["activity"].transpose("time", "unit").values)
-    if activity_as == "tsgroup":
-        if ids.dtype.kind in "iu":
-            keys, metadata = ids.tolist(), dict(unit_coords)
-        else:
-            keys, metadata = list(range(ids.size)), {"unit": ids, **unit_coords}
-        clash = [name for name in metadata if name in _TSGROUP_COMPUTED]
-        if clash:
-            raise RecordingError(f"unit coords {clash} clash with what pynapple's TsGroup "
-                                 "computes itself; rename them first (rec.rename(...))")
-        spikes = _spike_times(values, time, ids)
-        activity = nap.TsGroup({k: nap.Ts(t=s, time_support=support)
-                                for k, s in zip(keys, spikes)},
-                               time_support=support, metadata=metadata or None)
+    if activity_as != "tsgroup":
+        return nap.TsdFrame(t=time, d=values, columns=ids.tolist(), time_support=support,
+                            metadata=unit_coords or None)
+    if ids.dtype.kind in "iu":
+        keys, metadata = ids.tolist(), dict(unit_coords)
     else:
-        activity = nap.TsdFrame(t=time, d=values, columns=ids.tolist(),
-                                time_support=support, metadata=unit_coords or None)
-    position = nap.TsdFrame(
-        t=time, d=np.asarray(rec["position"].sel(space=["x", "y"])
-                             .transpose("time", "space").values, dtype=float),
-        columns=["x", "y"], time_support=support)
-    head_direction = None
-    if "head_direction" in rec:
-        head_direction = nap.Tsd(t=time, d=np.asarray(rec["head_direction"].values),
-                                 time_support=support)
+        keys, metadata = list(range(ids.size)), {"unit": ids, **unit_coords}
+    clash = [name for name in metadata if name in _TSGROUP_COMPUTED]
+    if clash:
+        raise RecordingError(f"unit coords {clash} clash with what pynapple's TsGroup "
+                             "computes itself; rename them first (rec.rename(...))")
+    spikes = _spike_times(values, time, ids)
+    return nap.TsGroup({k: nap.Ts(t=s, time_support=support) for k, s in zip(keys, spikes)},
+                       time_support=support, metadata=metadata or None)
 
+
+def _variables_to_pynapple(nap, rec, time, support) -> dict:
+    """The other per-sample variables as ``Tsd`` (or ``TsdFrame`` for the schema's 2-D
+    ones); a warning names those with no place in a time series."""
     variables, left_out = {}, []
     for name, var in rec.variables.items():
         if (name in _CORE or name in rec.dims or var.dims == ("trial_id",)
@@ -245,10 +260,8 @@ def to_pynapple(rec, *, activity_as="auto"):
             left_out.append(f"{name} {var.dims}")
     if left_out:
         warnings.warn(f"not carried to pynapple (no place for them in a time series): "
-                      f"{', '.join(left_out)}", UserWarning, stacklevel=2)
-    return {"activity": activity, "position": position, "head_direction": head_direction,
-            "trials": trials, "time_support": support, "variables": variables,
-            "attrs": dict(rec.attrs)}
+                      f"{', '.join(left_out)}", UserWarning, stacklevel=3)
+    return variables
 
 
 def _is(nap, obj, names):

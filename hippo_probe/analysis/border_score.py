@@ -12,7 +12,7 @@ from .._angles import wrap_angle
 from .._validators import check_finite, check_number, check_option, check_real, check_shape
 from . import _common
 from ._common import refuse_map_options
-from ._docs import fill_doc
+from .._docs import fill_doc
 from ._shuffles import MapStack, add_significance, check_percentile
 from .config import BORDER, CELL_CLASS
 from .place_fields import bin_coords, check_maps, detect_fields

@@ -20,7 +20,7 @@ from .grid_score import nan_reasons as grid_nan_reasons
 from .place_fields import bin_coords, check_maps, detect_fields
 from .spatial_information import skaggs_information
 from .speed_score import speed_arrays
-from ._docs import fill_doc
+from .._docs import fill_doc
 
 #: Class name -> (score column, config attribute of its percentile, paper).
 CLASSES = {

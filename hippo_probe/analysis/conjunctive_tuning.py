@@ -16,7 +16,7 @@ from .config import CELL_CLASS, CONJUNCTIVE, HEAD_DIRECTION
 from .head_direction_tuning import direction_bins, mean_vector
 from .ratemaps import _positions, position_bins, spatial_grid, tuning_sums
 from .spatial_information import skaggs_information
-from ._docs import fill_doc
+from .._docs import fill_doc
 
 
 def _ratio(num, den):

@@ -8,7 +8,7 @@ from scipy import stats
 
 from .._validators import check_finite
 from . import _common
-from ._docs import fill_doc
+from .._docs import fill_doc
 from .spatial_selectivity import spatial_selectivity
 
 

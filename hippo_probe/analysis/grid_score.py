@@ -11,7 +11,7 @@ from .._angles import wrap_angle
 from .._validators import check_number, check_option
 from . import _common
 from ._common import refuse_map_options
-from ._docs import fill_doc
+from .._docs import fill_doc
 from ._shuffles import MapStack, add_significance, check_percentile, flat_maps
 from .config import CELL_CLASS, GRID
 from .place_fields import bin_coords, check_maps

@@ -8,7 +8,7 @@ import xarray as xr
 from .._angles import wrap_angle
 from .._validators import check_allocation, check_number
 from . import _common
-from ._docs import fill_doc
+from .._docs import fill_doc
 from .config import HEAD_DIRECTION
 from .ratemaps import smooth_normalized, tuning_sums, warn_nonfinite
 

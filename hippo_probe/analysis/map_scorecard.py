@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from . import _common
-from ._docs import fill_doc
+from .._docs import fill_doc
 from .config import SCORECARD as CFG
 from .place_field_stability import pearson_masked, place_field_stability
 from .place_fields import place_fields

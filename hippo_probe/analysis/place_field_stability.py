@@ -7,7 +7,7 @@ import xarray as xr
 
 from .._validators import check_number, check_option
 from . import _common
-from ._docs import fill_doc
+from .._docs import fill_doc
 from .config import STABILITY
 from .ratemaps import _ratemap_parts
 

@@ -11,7 +11,7 @@ from scipy import ndimage
 from .._validators import check_dims, check_number, check_option
 from . import _common
 from ._common import refuse_map_options
-from ._docs import fill_doc
+from .._docs import fill_doc
 from ._shuffles import flat_maps
 from .config import PLACE_FIELD
 from .ratemaps import ratemaps

@@ -13,7 +13,7 @@ from .._validators import check_allocation, check_number, check_real, check_shap
 from . import _common
 from ._binning import BinSums, bin_sums, compact, grid_bins
 from ._common import AnalysisWarning
-from ._docs import fill_doc
+from .._docs import fill_doc
 from .config import RATEMAP
 
 

@@ -9,7 +9,7 @@ import xarray as xr
 
 from .._validators import check_bool, check_number, check_seed
 from . import _common
-from ._docs import fill_doc
+from .._docs import fill_doc
 from .config import REMAPPING
 from .ratemaps import _ratemap_parts
 

@@ -7,7 +7,7 @@ import xarray as xr
 
 from .._validators import check_dims
 from . import _common
-from ._docs import fill_doc
+from .._docs import fill_doc
 from .config import INFORMATION
 from .ratemaps import _maps_dataarray, _ratemap_parts
 

@@ -6,7 +6,7 @@ import numpy as np
 import xarray as xr
 
 from . import _common
-from ._docs import fill_doc
+from .._docs import fill_doc
 from .ratemaps import _maps_dataarray, _ratemap_parts
 
 

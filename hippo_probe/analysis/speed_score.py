@@ -11,7 +11,7 @@ from scipy import ndimage
 from .._validators import check_number, check_option
 from . import _common
 from ._common import shifts_for
-from ._docs import fill_doc
+from .._docs import fill_doc
 from ._shuffles import add_significance, check_percentile
 from .config import CELL_CLASS, RATEMAP, SPEED
 

@@ -66,9 +66,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._docs import fill_doc
 from ..tasks import TaskConfig, make_trials
-from ._common import (BaselineResult, provenance, resolve_start, resolve_task,
-                      start_guess)
+from ._common import BaselineResult, provenance, resolve_start, resolve_task, start_guess
 from .config import BaselineConfig, NaiveBayesConfig
 from .path_integration import displacements
 
@@ -150,6 +150,7 @@ def _target_prior(task, seed, config, nb: NaiveBayesConfig) -> TargetPrior:
                        nb.prior_trials, nb.time_window)
 
 
+@fill_doc
 def naive_bayes(batch, *, start: str | None = None, prior: TargetPrior | None = None,
                 config: TaskConfig | None = None,
                 baseline: BaselineConfig | None = None) -> BaselineResult:
@@ -157,16 +158,14 @@ def naive_bayes(batch, *, start: str | None = None, prior: TargetPrior | None = 
 
     Parameters
     ----------
-    batch : TrialBatch
+    %(batch)s
     start : {"known", "unknown"}, optional
         Default: unknown for localization, known otherwise (only the localization task
         needs the start to express its target).
     prior : TargetPrior, optional
         Default: :func:`target_prior` of the batch's task and seed, from
         ``NaiveBayesConfig.prior_trials`` training trials.
-    config : TaskConfig, optional
-        Must be the batch's own (``batch.config``, the default) if given.
-    baseline : BaselineConfig, optional
+    %(baseline_config)s
 
     Returns
     -------

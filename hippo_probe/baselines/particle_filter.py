@@ -109,13 +109,12 @@ from concurrent.futures import ThreadPoolExecutor
 import numba
 import numpy as np
 
+from .._docs import fill_doc
 from .._validators import check_positive
 from ..tasks import TaskConfig
-from ._common import (BaselineResult, provenance, resolve_start, resolve_task,
-                      start_prior_samples)
+from ._common import BaselineResult, provenance, resolve_start, resolve_task, start_prior_samples
 from .config import STREAM_TAGS, BaselineConfig
 from .contact import ContactModel, Observations, towards, wall_table, wall_terms
-
 
 # The kernel's arguments, grouped and read by name (a swapped argument cannot pass).
 #: One trial's initial particles: positions, their start, heading drift, arena hypothesis.
@@ -135,6 +134,7 @@ TrialOutputs = namedtuple(
                     "snap_eta snap_arena")
 
 
+@fill_doc
 def particle_filter(batch, n_particles: int | None = None, *, start: str | None = None,
                     oriented: bool = True, keep=(), threads: int | None = None,
                     config: TaskConfig | None = None,
@@ -143,7 +143,7 @@ def particle_filter(batch, n_particles: int | None = None, *, start: str | None 
 
     Parameters
     ----------
-    batch : TrialBatch
+    %(batch)s
     n_particles : int, optional
         Particles per trial (default ``ParticleFilterConfig.n_particles`` = 1,000 with a
         known start, ``unknown_start_particles`` = 2,000 with an unknown one).
@@ -157,11 +157,8 @@ def particle_filter(batch, n_particles: int | None = None, *, start: str | None 
         [-pi, pi): the start heading is unknown.
     keep : sequence of int
         Steps whose particles, weights and drifts to return (``result.particles``).
-    threads : int, optional
-        Trials run in parallel on this many threads (default: all cores).
-    config : TaskConfig, optional
-        Must be the batch's own (``batch.config``, the default) if given.
-    baseline : BaselineConfig, optional
+    %(threads)s
+    %(baseline_config)s
 
     Returns
     -------

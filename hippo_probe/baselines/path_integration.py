@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._docs import fill_doc
 from ..tasks import TaskConfig
-from ._common import (BaselineResult, provenance, resolve_start, resolve_task,
-                      start_guess)
+from ._common import BaselineResult, provenance, resolve_start, resolve_task, start_guess
 from .config import BaselineConfig
 
 
+@fill_doc
 def path_integration(batch, *, start: str | None = None, config: TaskConfig | None = None,
                      baseline: BaselineConfig | None = None) -> BaselineResult:
     r"""Dead reckoning from the sensed self-motion.
@@ -24,12 +25,10 @@ def path_integration(batch, *, start: str | None = None, config: TaskConfig | No
 
     Parameters
     ----------
-    batch : TrialBatch
+    %(batch)s
     start : {"known", "unknown"}, optional
         Default: unknown for the localization task, known otherwise.
-    config : TaskConfig, optional
-        Must be the batch's own (``batch.config``, the default) if given.
-    baseline : BaselineConfig, optional
+    %(baseline_config)s
 
     Returns
     -------

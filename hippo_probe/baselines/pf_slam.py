@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._docs import fill_doc
 from .._validators import check_positive
 from ..tasks import TaskConfig, fixed_arenas
 from ._common import BaselineResult, provenance, resolve_task
@@ -40,6 +41,7 @@ from .contact import wall_table
 from .particle_filter import run_filter
 
 
+@fill_doc
 def pf_slam(batch, n_particles: int | None = None, *, keep=(), threads: int | None = None,
             config: TaskConfig | None = None,
             baseline: BaselineConfig | None = None) -> BaselineResult:
@@ -54,11 +56,8 @@ def pf_slam(batch, n_particles: int | None = None, *, keep=(), threads: int | No
         ``ParticleFilterConfig.slam_particles`` = 10,000).
     keep : sequence of int
         Steps whose particles, weights and arena hypotheses to return.
-    threads : int, optional
-        Trials run in parallel on this many threads (default: all cores).
-    config : TaskConfig, optional
-        Must be the batch's own (``batch.config``, the default) if given.
-    baseline : BaselineConfig, optional
+    %(threads)s
+    %(baseline_config)s
 
     Returns
     -------

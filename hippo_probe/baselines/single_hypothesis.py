@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._docs import fill_doc
 from ..tasks import TaskConfig
-from ._common import (BaselineResult, provenance, resolve_start, resolve_task,
-                      start_guess)
+from ._common import BaselineResult, provenance, resolve_start, resolve_task, start_guess
 from .config import BaselineConfig
 from .contact import ContactModel, Observations, mean_retreat, wall_angle_error, wall_table
 from .path_integration import to_target_frame
 
 
+@fill_doc
 def single_hypothesis(batch, *, start: str | None = None, config: TaskConfig | None = None,
                       baseline: BaselineConfig | None = None) -> BaselineResult:
     r"""Path integration that jumps onto the most plausible wall position at each contact.
@@ -37,12 +38,10 @@ def single_hypothesis(batch, *, start: str | None = None, config: TaskConfig | N
 
     Parameters
     ----------
-    batch : TrialBatch
+    %(batch)s
     start : {"known", "unknown"}, optional
         Default: unknown (start prior's mean) for localization, known otherwise.
-    config : TaskConfig, optional
-        Must be the batch's own (``batch.config``, the default) if given.
-    baseline : BaselineConfig, optional
+    %(baseline_config)s
 
     Returns
     -------

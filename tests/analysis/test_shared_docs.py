@@ -5,7 +5,7 @@ import inspect
 import pytest
 
 import hippo_probe as hp
-from hippo_probe.analysis._docs import DOCS, fill_doc
+from hippo_probe._docs import DOCS, fill_doc
 
 
 def test_a_placeholder_line_becomes_the_entry_indented_as_it_was():
@@ -41,3 +41,15 @@ def test_every_analysis_docstring_is_filled_and_states_its_parameters(name):
     for param in inspect.signature(func).parameters:
         if param in DOCS or param in ("bin_size", "min_speed", "extent", "seed"):
             assert f"\n{param} :" in doc or f"\n{param}, " in doc, (name, param)
+
+
+@pytest.mark.parametrize("name", ["particle_filter", "pf_slam", "naive_bayes",
+                                  "single_hypothesis", "path_integration"])
+def test_every_baseline_docstring_is_filled_and_states_its_parameters(name):
+    import hippo_probe.baselines as baselines
+
+    func = getattr(baselines, name)
+    doc = inspect.getdoc(func)
+    assert "%(" not in doc
+    for param in inspect.signature(func).parameters:
+        assert f"\n{param} :" in doc, (name, param)

@@ -1,5 +1,6 @@
-"""Shared parameter descriptions: one text for each parameter that many analyses take
-(as MNE's ``docdict``), filled into their docstrings by :func:`fill_doc`.
+"""Shared parameter descriptions: one text for each parameter that many functions take
+(the analyses' map and shuffle options, the baselines' common arguments), as MNE's
+``docdict``, filled into their docstrings by :func:`fill_doc`.
 
 A docstring names an entry on a line of its own, ``%(bin_size)s``, indented as a
 parameter; the entry's lines take that indentation. Defaults that differ between
@@ -45,6 +46,18 @@ n_shuffles : int, optional
 seed : int, optional
     Seed of the shuffles' shifts (default ``SHUFFLE.seed``): the same seed, the same
     shifts.""",
+    # the baselines (hippo_probe.baselines)
+    "batch": """\
+batch : TrialBatch
+    The trials (:func:`hippo_probe.tasks.make_trials`).""",
+    "baseline_config": """\
+config : TaskConfig, optional
+    Must be the batch's own (``batch.config``, the default) if given.
+baseline : BaselineConfig, optional
+    The baselines' settings (default ``BaselineConfig()``).""",
+    "threads": """\
+threads : int, optional
+    Trials run in parallel on this many threads (default: all cores).""",
 }
 
 _PLACEHOLDER = re.compile(r"^(?P<indent>[ \t]*)%\((?P<key>\w+)\)s[ \t]*$", re.MULTILINE)

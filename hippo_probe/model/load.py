@@ -24,6 +24,38 @@ def parameters_digest(obj: dict) -> str:
     return content_digest({"model": obj.get("best_model") or obj["model"]})
 
 
+def as_readout(network: dict, base: dict, base_file) -> dict:
+    """A network file's content as a readout file: its classifier alone, naming its
+    network ``base_file`` (``<name>[_seed<k>].pt``, whose loaded content is ``base``) by
+    name, seed and parameters' digest (:data:`READOUT_OF`).
+
+    Raises
+    ------
+    ValueError
+        ``network``'s other parameters are not ``base``'s: it is not a readout of it.
+    """
+    import torch
+
+    state = network.get("best_model") or network["model"]
+    # the network read may have a classifier of its own (a specialized network): the
+    # readout's replaces it
+    base_state = {k: v for k, v in (base.get("best_model") or base["model"]).items()
+                  if not k.startswith("classifier.")}
+    head = {k: v for k, v in state.items() if k.startswith("classifier.")}
+    rest = {k: v for k, v in state.items() if not k.startswith("classifier.")}
+    if set(head) != {"classifier.weight", "classifier.bias"} or set(rest) != set(base_state) \
+            or not all(torch.equal(v, base_state[k]) for k, v in rest.items()):
+        raise ValueError(f"`network` is not a readout of {Path(base_file).name}: its "
+                         f"parameters other than the classifier differ from that network's")
+    stem, _, k = Path(base_file).stem.rpartition("_seed")
+    name, seed = (stem, int(k)) if stem and k.isdigit() else (Path(base_file).stem, 0)
+    out = {key: value for key, value in network.items() if key != "best_model"}
+    out["model"] = head
+    out[READOUT_OF] = {"name": name, "seed": seed,
+                       "parameters_sha256": parameters_digest(base)}
+    return out
+
+
 def base_file(readout_path, name: str, seed: int) -> Path:
     """The file of the network a readout reads: ``<name>[_seed<k>].pt`` beside the readout
     file if there is one, else the shipped network of that name and seed."""

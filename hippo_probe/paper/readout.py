@@ -326,14 +326,12 @@ def readout_network(base_file, decoder, *, description: dict) -> dict:
     import torch
 
     from ..model.checkpoint import load
-    from ..model.load import READOUT_OF, parameters_digest
+    from ..model.load import as_readout
     from ..pretrained import checkpoint_world
     from ..tasks import task_config
 
     base_file = Path(base_file)
     base = load(base_file)
-    stem, _, k = base_file.stem.rpartition("_seed")
-    name, seed = (stem, int(k)) if stem and k.isdigit() else (base_file.stem, 0)
     w, b = decoder_weights(decoder)
     classes = np.asarray(decoder.classes_)
     n_classes = task_config("specialized").n_arenas
@@ -345,16 +343,16 @@ def readout_network(base_file, decoder, *, description: dict) -> dict:
     weight = np.zeros((n_classes, w.shape[1]), np.float32)
     bias = np.full(n_classes, -1e4, np.float32)
     weight[classes], bias[classes] = w, b
-    head = {"classifier.weight": torch.from_numpy(weight),
-            "classifier.bias": torch.from_numpy(bias)}
+    state = {**(base.get("best_model") or base["model"]),
+             "classifier.weight": torch.from_numpy(weight),
+             "classifier.bias": torch.from_numpy(bias)}
     model_config = dict(base["model_config"], n_classes=n_classes)
-    return {"model": head, "model_config": model_config, "task": "specialized",
-            "world": checkpoint_world(base), "config": description, "class_weight": None,
-            "test": None, "steps_done": None, "finished": True,
-            READOUT_OF: {"name": name, "seed": seed,
-                         "parameters_sha256": parameters_digest(base)},
-            "base_network": {"file": base_file.name, "steps_done": base.get("steps_done"),
-                             "finished": base.get("finished")}}
+    network = {"model": state, "model_config": model_config, "task": "specialized",
+               "world": checkpoint_world(base), "config": description,
+               "class_weight": None, "test": None, "steps_done": None, "finished": True,
+               "base_network": {"file": base_file.name, "steps_done": base.get("steps_done"),
+                                "finished": base.get("finished")}}
+    return as_readout(network, base, base_file)
 
 
 def write_json(path, obj) -> None:

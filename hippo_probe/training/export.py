@@ -38,6 +38,24 @@ def _jsonable(obj):
     return obj
 
 
+def _readout_if_shipped_base(network: dict, init_from, dest) -> dict:
+    """A retrained readout's file holds its classifier alone when the network it reads is
+    a shipped one or sits in ``dest`` (:func:`~hippo_probe.model.load.as_readout`), so
+    its 256-unit LSTM is not shipped twice; otherwise the whole network."""
+    from ..model.load import as_readout
+    from ..pretrained import HERE, resolve_network_file
+
+    if not init_from:
+        return network
+    try:
+        base_path = resolve_network_file(init_from)
+    except (TypeError, ValueError):
+        return network
+    if base_path.parent.resolve() not in (HERE.resolve(), Path(dest).resolve()):
+        return network
+    return as_readout(network, load(base_path), base_path)
+
+
 def export_network(run_dir, name: str, dest) -> list:
     """Write ``<dest>/<name>.pt`` (best parameters so far, architecture, task, test
     metrics if the run finished) and ``<dest>/<name>.log.json`` (the training log; its
@@ -68,6 +86,8 @@ def export_network(run_dir, name: str, dest) -> list:
                "config": ckpt["config"], "class_weight": log.get("class_weight"),
                "test": log.get("test"), "steps_done": ckpt["step"], "finished": finished,
                "base_network": log.get("base_network")}
+    if ckpt["config"].get("train_only") == "classifier":
+        network = _readout_if_shipped_base(network, ckpt["config"].get("init_from"), dest)
     pt = dest / f"{name}.pt"
     save_atomic(network, pt)
     log.update(steps_done=ckpt["step"], finished=finished,

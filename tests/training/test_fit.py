@@ -240,6 +240,15 @@ def test_export_and_readout_retraining(uninterrupted, tmp_path):
     log = json.loads((tmp_path / "readout" / "log.json").read_text())
     assert log["base_network"]["file"] == pt.name and log["class_weight"] == 1.0
     assert log["base_network"]["init_from"] == str(pt)
+    # shipped beside the network it reads, the readout holds its classifier alone
+    from hippo_probe.model.load import READOUT_OF
+    ro, _ = export_network(tmp_path / "readout", "tiny_spec_readout", dest=tmp_path)
+    saved = torch.load(ro, weights_only=False)
+    assert set(saved["model"]) == {"classifier.weight", "classifier.bias"}
+    assert saved[READOUT_OF]["name"] == "tiny_spec" and ro.stat().st_size < pt.stat().st_size
+    loaded = hp.load_pretrained(ro).state_dict()
+    for k, v in new.items():
+        torch.testing.assert_close(loaded[k], v, rtol=0, atol=0)
 
 
 @pytest.mark.parametrize("steps,every", [(6, 1), (500, 1), (501, 2), (40_000, 81)])

@@ -78,6 +78,17 @@ def _check_refresh(args):
     check_repository(args.refresh_tracked)      # a clone to refresh, or one line now
 
 
+def _refresh_of_main(args):
+    """The clone ``main`` refreshes: ``--refresh-tracked``'s at the paper size; at another
+    size none, said in one line (``bash quickstart.sh main --size tiny`` passes its clone
+    whatever the size; ``figures`` refuses instead)."""
+    if args.refresh_tracked is not None and args.size != "paper":
+        print(f"(--size {args.size}: the tracked copies show the paper size; they are not "
+              f"refreshed)")
+        return None
+    return args.refresh_tracked
+
+
 def _figures(args, *, extra_tracked=()):
     _check_refresh(args)
     out = check_output("--out", args.out, kind="folder")
@@ -147,6 +158,7 @@ def _main(args):
     out = check_output("--out", args.out, kind="folder")
     if args.cache is not None:
         check_output("--cache", args.cache, kind="folder")
+    args.refresh_tracked = _refresh_of_main(args)
     _check_refresh(args)
     from ._atomic import save_figure
     from .trial_stats import format_stats, plot_example_trials, world_stats

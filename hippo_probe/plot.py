@@ -16,6 +16,8 @@ matplotlib is imported on first use only, so importing the analyses stays light.
 
 from __future__ import annotations
 
+import functools
+
 import warnings
 
 import numpy as np
@@ -702,26 +704,32 @@ def recording_overview(rec, *, trial=None, n_units=64, fig=None):
 def drawn_once_in_jupyter(fig):
     """Return ``fig``, made to be drawn once when a Jupyter cell returns it.
 
-    A Figure that ends a cell is drawn twice: as the cell's value, and by pyplot's inline
-    backend, which draws every open figure when the cell ends. Whichever draws ``fig``
-    first here also hands it back from pyplot, so the other finds nothing left to draw;
-    a later ``fig`` alone in a cell draws it again, as for any Figure. Outside IPython
-    nothing changes.
+    A Figure that ends a cell is drawn twice under matplotlib's inline backend: as the
+    cell's value, and by the backend, which draws every open figure when the cell ends.
+    There, whichever draws ``fig`` first also hands it back from pyplot, so the other
+    finds nothing left to draw; a later ``fig`` alone in a cell draws it again, as for
+    any Figure. Under any other backend (scripts, terminal IPython, Qt or widget windows)
+    nothing is changed.
     """
-    import matplotlib.pyplot as plt
+    import matplotlib
 
-    def _ipython_display_():
-        from IPython.display import display
-
-        plt.close(fig)                     # drawn now: pyplot's flush will not again
-        del fig._ipython_display_          # display it the usual way, just this once
-        try:
-            display(fig)
-        finally:
-            fig._ipython_display_ = _ipython_display_
-
-    fig._ipython_display_ = _ipython_display_
+    if "inline" in matplotlib.get_backend():
+        fig._ipython_display_ = functools.partial(_display_once, fig)
     return fig
+
+
+def _display_once(fig):
+    """``fig._ipython_display_``: close ``fig`` in pyplot, then display it as usual."""
+    import matplotlib.pyplot as plt
+    from IPython.display import display
+
+    plt.close(fig)                     # drawn now: the inline flush will not again
+    hook = fig.__dict__.pop("_ipython_display_", None)
+    try:
+        display(fig)
+    finally:
+        if hook is not None:
+            fig._ipython_display_ = hook
 
 
 def plot_result(result, **kwargs):

@@ -63,8 +63,7 @@ def test_figures_write_only_under_out(figures_run):
 
 @pytest.mark.parametrize("extra", [["figures", "--size", "tiny"],
                                    ["figures", "--size", "full"],
-                                   ["figures", "--size", "paper", "--only", "fig2"],
-                                   ["main", "--size", "tiny"]])
+                                   ["figures", "--size", "paper", "--only", "fig2"]])
 def test_refresh_tracked_needs_every_figure_at_the_paper_size(tmp_path, capsys, extra):
     from hippo_probe.cli import main
 
@@ -275,3 +274,15 @@ def test_arena_probe(tmp_path):
     # the positive control: a probe of the specialized network separates the training
     # trials' arenas far above chance (0.01)
     assert max(c["train"] for c in cells) > 0.5
+
+
+def test_main_at_another_size_runs_without_refreshing(capsys):
+    import argparse
+
+    from hippo_probe._main import _refresh_of_main
+
+    tiny = argparse.Namespace(size="tiny", refresh_tracked=".")
+    assert _refresh_of_main(tiny) is None
+    assert "not refreshed" in capsys.readouterr().out
+    paper = argparse.Namespace(size="paper", refresh_tracked=".")
+    assert _refresh_of_main(paper) == "."

@@ -53,7 +53,8 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
       removed, so a change of mean rates alone does not count as remapping);
     - ``lifetime_sparseness`` (median over units) and ``population_sparseness`` (median
       over bins): Treves & Rolls (1991) ``<r>^2 / <r^2>``; ``fraction_silent``: units
-      whose peak rate is below ``config.silent_fraction`` of the population's median peak.
+      whose peak rate is 0 or below ``config.silent_fraction`` of the active units' median
+      peak.
 
     Verdicts (``attrs``), rules fixed in :class:`~.config.ScorecardConfig`:
     ``place_fields`` if ``fraction_place_like >= config.place_fraction``;
@@ -109,9 +110,16 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
     with np.errstate(invalid="ignore"):
         place_like = ((n_fields >= 1) & (n_fields <= cfg.max_fields)
                       & (covered <= cfg.max_field_fraction * visited))
-    field_areas = area[place_like] if place_like.any() else np.array([np.nan])
     peak = np.nanmax(flat, axis=-1)                                  # (unit, env)
-    silent = peak < cfg.silent_fraction * np.nanmedian(peak, axis=0, keepdims=True)
+    # silent: no activity at all, or a peak far below the active units' median peak (the
+    # median over the active ones: where most units are silent it would be 0)
+    with warnings.catch_warnings(), np.errstate(invalid="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)           # no active unit: NaN
+        active_median = np.nanmedian(np.where(peak > 0, peak, np.nan), axis=0,
+                                     keepdims=True)
+        silent = (peak <= 0) | (peak < cfg.silent_fraction * active_median)
+    place_like &= ~silent
+    field_areas = area[place_like] if place_like.any() else np.array([np.nan])
 
     within = place_field_stability(rec, **opts)["stability"].values
     pairs = [(i, j) for i in range(len(envs)) for j in range(i + 1, len(envs))]

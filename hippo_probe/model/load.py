@@ -47,8 +47,10 @@ def as_readout(network: dict, base: dict, base_file) -> dict:
             or not all(torch.equal(v, base_state[k]) for k, v in rest.items()):
         raise ValueError(f"`network` is not a readout of {Path(base_file).name}: its "
                          f"parameters other than the classifier differ from that network's")
-    stem, _, k = Path(base_file).stem.rpartition("_seed")
-    name, seed = (stem, int(k)) if stem and k.isdigit() else (Path(base_file).stem, 0)
+    name, seed = _name_and_seed(Path(base_file).stem)
+    if not _PLAIN_NAME.fullmatch(name):
+        raise ValueError(f"a readout names its network by a plain file name; "
+                         f"{Path(base_file).name!r} is not one")
     out = {key: value for key, value in network.items() if key != "best_model"}
     out["model"] = head
     out[READOUT_OF] = {"name": name, "seed": seed,
@@ -56,11 +58,24 @@ def as_readout(network: dict, base: dict, base_file) -> dict:
     return out
 
 
-def base_file(readout_path, name: str, seed: int) -> Path:
-    """The file of the network a readout reads: ``<name>[_seed<k>].pt`` beside the readout
-    file if there is one, else the shipped network of that name and seed."""
-    beside = Path(readout_path).parent / (f"{name}.pt" if not seed else f"{name}_seed{seed}.pt")
-    return beside if beside.is_file() else resolve_network_file(name, seed or None)
+def _name_and_seed(stem: str) -> tuple[str, int]:
+    """``"generalized_seed2"`` -> ("generalized", 2); a seed-0 network has no suffix, so
+    ``"x_seed0"`` is the name ``"x_seed0"`` itself."""
+    head, _, k = stem.rpartition("_seed")
+    return (head, int(k)) if head and k.isdigit() and int(k) > 0 else (stem, 0)
+
+
+def base_files(readout_path, name: str, seed: int) -> list[Path]:
+    """Where the network a readout reads may be: ``<name>[_seed<k>].pt`` beside the
+    readout file, then the shipped network of that name and seed. Only these two places:
+    a name never reaches another folder."""
+    from ..pretrained import HERE, NAMES
+
+    file = f"{name}.pt" if not seed else f"{name}_seed{seed}.pt"
+    places = [Path(readout_path).parent / file]
+    if name in NAMES:
+        places.append(HERE / file)
+    return [p for p in dict.fromkeys(places) if p.is_file()]
 
 
 def network_parameters(obj: dict, path) -> dict:
@@ -83,15 +98,19 @@ def _readout_parameters(obj: dict, path) -> dict:
             and isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
         raise CheckpointError(f"`checkpoint` {str(path)!r} is a readout whose network is "
                               f"not named by a plain name and seed: {ref!r}")
-    try:
-        base = load(base_file(path, name, seed))
-    except (ValueError, FileNotFoundError) as err:
-        raise CheckpointError(f"`checkpoint` {str(path)!r} reads the network {name!r} "
-                              f"(seed {seed}), which cannot be loaded: {err}") from None
-    if parameters_digest(base) != ref.get("parameters_sha256"):
-        raise CheckpointError(f"`checkpoint` {str(path)!r} was fitted on other parameters "
-                              f"of the network {name!r} (seed {seed}) than those found; "
-                              f"refit it on this version of that network")
+    digest = ref.get("parameters_sha256")
+    candidates = base_files(path, name, seed)
+    for candidate in candidates:          # the first with the parameters it was fitted on
+        base = load(candidate)
+        if parameters_digest(base) == digest:
+            break
+    else:
+        raise CheckpointError(
+            f"`checkpoint` {str(path)!r} reads the network {name!r} (seed {seed}), "
+            + ("which was found neither beside it nor among the shipped networks"
+               if not candidates else
+               f"but {', '.join(str(c) for c in candidates)} holds other parameters than "
+               f"those it was fitted on; refit it on that version of the network"))
     head = obj["model"]
     if set(head) != {"classifier.weight", "classifier.bias"}:
         raise CheckpointError(f"`checkpoint` {str(path)!r} is a readout and must hold only "

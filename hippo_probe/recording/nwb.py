@@ -483,6 +483,11 @@ def _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction, head_directi
     index = np.searchsorted(present, index[keep])
     time, xy = time[keep], xy[keep]
     sample_starts, sample_stops, _ = trial_blocks(index)
+    # the sample interval of the samples kept (an epoch may be tracked at another rate
+    # than the rest of the file), within trials, as the schema's dt means
+    within = np.diff(time)[index[1:] == index[:-1]]
+    if within.size:
+        dt = float(np.median(within))
     trial_env = _trial_environment(nwb, environment, ids, from_trials)
 
     values, unit_ids, unit_coords, kind = _read_activity(

@@ -38,10 +38,12 @@ def _jsonable(obj):
     return obj
 
 
-def _readout_if_shipped_base(network: dict, init_from, dest) -> dict:
+def _readout_if_shipped_base(network: dict, init_from, dest, name: str) -> dict:
     """A retrained readout's file holds its classifier alone when the network it reads is
     a shipped one or sits in ``dest`` (:func:`~hippo_probe.model.load.as_readout`), so
-    its 256-unit LSTM is not shipped twice; otherwise the whole network."""
+    its 256-unit LSTM is not shipped twice; otherwise (a base elsewhere, a base that is
+    itself a readout or has changed since, or the file about to be written) the whole
+    network."""
     from ..model.load import as_readout
     from ..pretrained import HERE, resolve_network_file
 
@@ -51,9 +53,13 @@ def _readout_if_shipped_base(network: dict, init_from, dest) -> dict:
         base_path = resolve_network_file(init_from)
     except (TypeError, ValueError):
         return network
-    if base_path.parent.resolve() not in (HERE.resolve(), Path(dest).resolve()):
+    if base_path.parent.resolve() not in (HERE.resolve(), Path(dest).resolve()) \
+            or base_path.resolve() == (Path(dest) / f"{name}.pt").resolve():
         return network
-    return as_readout(network, load(base_path), base_path)
+    try:
+        return as_readout(network, load(base_path), base_path)
+    except ValueError:
+        return network
 
 
 def export_network(run_dir, name: str, dest) -> list:
@@ -87,7 +93,8 @@ def export_network(run_dir, name: str, dest) -> list:
                "test": log.get("test"), "steps_done": ckpt["step"], "finished": finished,
                "base_network": log.get("base_network")}
     if ckpt["config"].get("train_only") == "classifier":
-        network = _readout_if_shipped_base(network, ckpt["config"].get("init_from"), dest)
+        network = _readout_if_shipped_base(network, ckpt["config"].get("init_from"), dest,
+                                           name)
     pt = dest / f"{name}.pt"
     save_atomic(network, pt)
     log.update(steps_done=ckpt["step"], finished=finished,

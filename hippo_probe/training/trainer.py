@@ -31,7 +31,7 @@ from .._validators import check_bool
 from .._version import __version__
 from ..errors import RunInUseError
 from ..model.config import ModelConfig, input_scale_for, native_bf16, resolve_precision
-from ..model.load import network_parameters
+from ..model.load import READOUT_OF, network_parameters
 from ..model.navigator import Navigator
 from ..tasks import make_trials, task_config
 from ..model.checkpoint import load, load_into, require, save_atomic
@@ -109,6 +109,8 @@ def build_network(config: TrainConfig) -> Navigator:
                             "sha1": _sha1(path),
                             "steps_done": obj.get("steps_done", obj.get("step")),
                             "finished": obj.get("finished")}
+        if READOUT_OF in obj:           # a readout file: the network it reads, pinned too
+            net.base_network[READOUT_OF] = obj[READOUT_OF]
     if config.train_only == "classifier":
         for name, p in net.named_parameters():
             p.requires_grad_(name.startswith("classifier."))

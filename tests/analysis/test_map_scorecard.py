@@ -79,3 +79,14 @@ def test_a_signed_activity_is_offset_by_its_recording_minimum():
     card = hp.map_scorecard(signed, bin_size=0.05)
     assert "minimum over the recording" in card.attrs["rate_offset"]
     assert card.attrs["place_fields"] and card.attrs["global_remapping"]
+
+
+def test_units_silent_in_most_of_an_arena_are_still_called_silent():
+    rec = _population("place")
+    rate = rec.activity.values.copy()
+    # 18 of 24 units silent in environment 1: the median peak there is 0
+    rate[np.ix_(rec.environment.values == 1, np.arange(18))] = 0.0
+    quiet = rec.assign(activity=(rec.activity.dims, rate, rec.activity.attrs))
+    card = hp.map_scorecard(quiet, bin_size=0.05)
+    assert float(card.fraction_silent) == pytest.approx(18 / 48)
+    assert int(card.n_units_place_like.sel(environment=1)) <= 6

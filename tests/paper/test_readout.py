@@ -191,7 +191,8 @@ def test_a_readout_file_holds_its_classifier_and_refuses_another_network(tiny, t
     changed["model"] = {k: v + 1e-3 if k == "lstm.bias" else v
                         for k, v in changed["model"].items()}
     save_atomic(changed, base)
-    with pytest.raises(CheckpointError, match="fitted on other parameters"):
+    with pytest.raises(CheckpointError, match="holds other parameters than those it was "
+                                              "fitted on"):
         hp.load_pretrained(tmp_path / "readout.pt")
     # a network named by a path is not looked up
     save_atomic({**readout, READOUT_OF: {**readout[READOUT_OF], "name": "../tinynet"}},
@@ -212,3 +213,34 @@ def test_the_readout_figure_draws_the_curve_and_the_learning_curve(tiny):
     left, right = fig.axes
     assert len(left.lines) >= 2 and right.get_xscale() == "log"
     assert left.get_xlabel() == "time in trial (s)"
+
+
+def test_a_shipped_readout_finds_its_network_past_a_namesake_and_nowhere_else(tmp_path,
+                                                                           monkeypatch):
+    import shutil
+
+    import hippo_probe as hp
+    from hippo_probe.errors import CheckpointError
+    from hippo_probe.model.checkpoint import load, save_atomic
+    from hippo_probe.model.load import READOUT_OF
+    from hippo_probe.pretrained import HERE
+
+    shutil.copy(HERE / "generalized_readout.pt", tmp_path)
+    # a user's own "generalized" beside it: not the network it was fitted on
+    other = load(HERE / "generalized.pt")
+    other["model"] = {k: v + 1e-3 if k == "lstm.bias" else v
+                      for k, v in other["model"].items()}
+    save_atomic(other, tmp_path / "generalized.pt")
+    shipped = hp.load_pretrained("generalized_readout").state_dict()
+    found = hp.load_pretrained(tmp_path / "generalized_readout.pt").state_dict()
+    assert all((found[k] == v).all() for k, v in shipped.items())
+    # a network that is neither beside it nor shipped is not looked for anywhere else
+    readout = load(HERE / "generalized_readout.pt")
+    save_atomic({**readout, READOUT_OF: {**readout[READOUT_OF], "name": "mynet"}},
+                tmp_path / "mine.pt")
+    (tmp_path / "cwd").mkdir()
+    save_atomic(load(HERE / "generalized.pt"), tmp_path / "cwd" / "mynet")
+    monkeypatch.chdir(tmp_path / "cwd")
+    with pytest.raises(CheckpointError, match="found neither beside it nor among the "
+                                              "shipped networks"):
+        hp.load_pretrained(tmp_path / "mine.pt")

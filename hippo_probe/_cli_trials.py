@@ -4,7 +4,7 @@ trials (``record``, ``evaluate``, ``baselines``, ``world-stats``): ``--task``,
 
 from __future__ import annotations
 
-from .cli import count, one_of
+from ._cli_common import count, one_of
 from .tasks import SPLITS, TASKS
 from .world.config import WORLDS
 

@@ -9,7 +9,7 @@ main`` passes its own clone).
 
 import time
 
-from .cli import check_output, one_of
+from ._cli_common import check_output, one_of
 
 # the names only: the builders (matplotlib, torch) are imported when a command runs
 from .paper import FIGURES

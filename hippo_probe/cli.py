@@ -2,166 +2,40 @@
 
 Each subsystem contributes its subcommands from a small ``_cli`` module (argument parsing
 only; the heavy imports happen when a command runs), so ``hippo-probe --help`` is fast and
-never imports torch.
-
-The helpers here give every subcommand one voice: :class:`Parser` (each option's default
-shown in ``--help``, usage errors in one line), :func:`one_of` (an option restricted to a
-few names, refused with the package's validator message) and :func:`check_output` (an
-output path refused before the work starts, naming the flag).
+never imports torch. The subcommands, in the order ``--help`` shows them:
+``world-stats`` (:mod:`hippo_probe.trial_stats._cli`), ``train``, ``evaluate`` and
+``export-network`` (:mod:`hippo_probe.training._cli`), ``record`` and ``networks``
+(:mod:`hippo_probe.model._cli`), ``baselines`` (:mod:`hippo_probe.baselines._cli`),
+``import-nwb`` and the recording tools (:mod:`hippo_probe.recording._cli`), ``main`` and
+``figures`` (:mod:`hippo_probe._main`). What they share is in
+:mod:`hippo_probe._cli_common`.
 """
 
 from __future__ import annotations
 
-import argparse
-import importlib
-import os
 import sys
-from pathlib import Path
 
-# modules that define ``add_commands(subparsers)``; in the order shown by --help
-_COMMAND_MODULES = (
-    "hippo_probe.trial_stats._cli",
-    "hippo_probe.training._cli",
-    "hippo_probe.model._cli",
-    "hippo_probe.baselines._cli",
-    "hippo_probe.recording._cli",
-    "hippo_probe._main",
-)
+from . import _main
+from ._cli_common import Parser
+from .baselines import _cli as baselines_cli
+from .model import _cli as model_cli
+from .recording import _cli as recording_cli
+from .training import _cli as training_cli
+from .trial_stats import _cli as trial_stats_cli
 
-
-class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
-    """``--help`` with each option's default after its text, "(default: 0)".
-
-    An option whose default is None says in its own text what happens without it
-    ("default: the network's own"), which reads better than "(default: None)".
-    """
-
-    def _get_help_string(self, action):
-        if action.default is None:
-            return action.help
-        return super()._get_help_string(action)
+#: The modules that define ``add_commands(subparsers)``, in the order shown by --help.
+COMMAND_MODULES = (trial_stats_cli, training_cli, model_cli, baselines_cli, recording_cli,
+                   _main)
 
 
-class Parser(argparse.ArgumentParser):
-    """The parser of ``hippo-probe`` and of every subcommand (``add_subparsers`` makes its
-    subparsers of the same class): :class:`HelpFormatter`, and a usage error is one line,
-    like the errors of the commands themselves."""
-
-    def __init__(self, *args, formatter_class=HelpFormatter, **kwargs):
-        super().__init__(*args, formatter_class=formatter_class, **kwargs)
-
-    def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
-
-
-def one_of(name: str, allowed):
-    """``type=`` of an option restricted to ``allowed`` (give ``choices=allowed`` too, for
-    the help): another value is refused with the package's message, "argument --task:
-    `task` must be one of 'localization', ...; got 'maze'"."""
-    from ._validators import check_option
-
-    allowed = tuple(allowed)
-
-    def parse(text):
-        try:
-            return check_option(name, text, allowed)
-        except ValueError as err:
-            raise argparse.ArgumentTypeError(str(err)) from None
-
-    parse.__name__ = name
-    return parse
-
-
-def count(low: int = 1):
-    """``type=`` of an option that counts something (trials, particles, steps): a whole
-    number >= ``low``, else argparse's one line, "argument --trials: must be a whole number
-    >= 1; got 0" (an option's own name, not the Python argument it becomes)."""
-    def parse(text):
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"must be a whole number >= {low}; "
-                                             f"got {text!r}") from None
-        if value < low:
-            raise argparse.ArgumentTypeError(f"must be a whole number >= {low}; got {value}")
-        return value
-
-    parse.__name__ = "count"
-    return parse
-
-
-#: What a ``kind="file"`` output may replace without --overwrite: a file of the kind the
-#: command writes (a figure, a JSON of numbers), never e.g. a tracked text file.
-OUTPUT_SUFFIXES = {"figure": (".png", ".pdf", ".svg"), "json": (".json",)}
-
-
-def check_output(flag: str, path, *, kind: str = "store", overwrite: bool = False,
-                 writes: str = "figure") -> Path:
-    """Refuse, before any work starts, an output path the command could not write at its
-    end; the message names the command-line ``flag``.
-
-    Parameters
-    ----------
-    flag : str
-        The option as typed, e.g. ``"--out"`` (or a positional's metavar, ``"DEST"``).
-    path : str or os.PathLike
-    kind : {"store", "file", "folder"}
-        ``"store"``: a zarr store, refused if it exists unless ``overwrite`` (pass
-        --overwrite); ``"file"``: a file of the kind ``writes`` replaced freely (an older
-        figure or JSON of the command), any other existing file refused unless
-        ``overwrite``, and refused if it is an existing folder; ``"folder"``: a folder
-        written into, refused if it is a file.
-    overwrite : bool
-        The command's --overwrite.
-    writes : {"figure", "json"}
-        What a ``"file"`` output is (:data:`OUTPUT_SUFFIXES`).
-
-    Returns
-    -------
-    pathlib.Path
-
-    Raises
-    ------
-    FileExistsError, IsADirectoryError, NotADirectoryError, PermissionError
-    """
-    path = Path(path)
-    if kind == "store" and (path.exists() or path.is_symlink()) and not overwrite:
-        raise FileExistsError(f"{flag} {path} already exists; pass --overwrite to replace it")
-    if kind == "file" and path.is_dir():
-        raise IsADirectoryError(f"{flag} {path} is a folder; give a file name (e.g. "
-                                f"{path / 'errors.png'})")
-    if kind == "file" and path.is_file() and not overwrite \
-            and path.suffix.lower() not in OUTPUT_SUFFIXES[writes]:
-        raise FileExistsError(f"{flag} {path} exists and is not a {writes} file "
-                              f"({', '.join(OUTPUT_SUFFIXES[writes])}) this command "
-                              f"writes; pass --overwrite to replace it")
-    if kind == "folder" and path.exists() and not path.is_dir():
-        raise NotADirectoryError(f"{flag} {path} is a file; give a folder")
-    # the nearest existing folder above it is where the output (or its folders) is made
-    for parent in path.absolute().parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise NotADirectoryError(f"{flag} {path}: {parent} is a file, not a folder")
-            if not os.access(parent, os.W_OK | os.X_OK):
-                raise PermissionError(f"{flag} {path}: no permission to write in {parent}")
-            break
-    return path
-
-
-def build_parser() -> argparse.ArgumentParser:
+def build_parser() -> Parser:
     parser = Parser(
         prog="hippo-probe",
         description="Recurrent networks that navigate like rats, recorded like real cells.")
     from ._version import __version__
     parser.add_argument("--version", action="version", version=f"hippo_probe {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name in _COMMAND_MODULES:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as err:
-            if err.name == name:      # subsystem not built yet
-                continue
-            raise
+    for module in COMMAND_MODULES:
         module.add_commands(sub)
     return parser
 

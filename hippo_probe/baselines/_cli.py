@@ -1,7 +1,7 @@
 """``hippo-probe baselines``."""
 
+from .._cli_common import check_output, count
 from .._cli_trials import add_trial_options
-from ..cli import check_output, count
 
 
 def add_commands(sub):

@@ -1,7 +1,7 @@
 """``hippo-probe record``, ``hippo-probe export-network`` and ``hippo-probe networks``."""
 
+from .._cli_common import check_output
 from .._cli_trials import add_trial_options
-from ..cli import check_output
 from ..world.config import MotionConfig
 
 

@@ -1,6 +1,6 @@
 """``hippo-probe import-nwb``."""
 
-from ..cli import check_output, one_of
+from .._cli_common import check_output, one_of
 
 
 def add_commands(sub):

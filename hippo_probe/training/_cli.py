@@ -1,7 +1,7 @@
 """``hippo-probe train`` and ``hippo-probe evaluate``."""
 
+from .._cli_common import check_output, count, one_of
 from .._cli_trials import add_trial_options
-from ..cli import check_output, count, one_of
 from ..tasks import TASKS
 from ..world.config import WORLDS
 

@@ -1,7 +1,7 @@
 """``hippo-probe world-stats``."""
 
+from .._cli_common import check_output
 from .._cli_trials import add_trial_options
-from ..cli import check_output
 
 
 def add_commands(sub):

@@ -65,6 +65,7 @@ html_theme_options = {
     "show_prev_next": False,
     "secondary_sidebar_items": ["page-toc"],
 }
-html_static_path = []
+html_static_path = ["_static"]
+html_css_files = ["hippo_probe.css"]
 warnings.filterwarnings("ignore", category=UserWarning,
                         message="Matplotlib is currently using agg")

@@ -3,9 +3,11 @@
 Everything is written to a hidden temporary beside the destination and renamed into
 place only when complete, so a crash (even ``kill -9``) leaves the previous file or the
 new one at the destination, never half of one. Temporaries are named
-``.NAME.partial-HOST-PID-UUID``; one whose writer is no longer running (same host, dead
-process) or that is older than :data:`STALE_AFTER_S` is garbage, and is removed by the
-next write (or :func:`remove_stale` call) in that folder.
+``.NAME.partial-HOST-PID-UUID`` and a directory set aside by an overwrite
+``.NAME.old-HOST-PID-UUID``; one whose writer is no longer running (same host, dead
+process) or that is older than :data:`STALE_AFTER_S` is left over, and is cleaned by the
+next write (or :func:`remove_stale` call) in that folder. A live writer's are never
+touched, so writers of different names in one folder cannot undo each other's work.
 
 Without ``overwrite`` the final step refuses an existing destination atomically (a hard
 link for a file, a rename onto a non-empty directory for a store), so two concurrent
@@ -50,11 +52,18 @@ def _remove(path: Path) -> None:
             pass
 
 
-def _is_stale(item: Path, now: float) -> bool:
-    host, _, rest = item.name.rpartition(PARTIAL)[2].partition("-")
+def _owner_tag() -> str:
+    return f"{_HOST}-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+
+
+def _is_stale(item: Path, marker: str, now: float) -> bool:
+    """Whether the writer that named ``item`` (``…MARKER HOST-PID-UUID``) has stopped."""
+    host, _, rest = item.name.rpartition(marker)[2].partition("-")
     pid = rest.split("-")[0]
     if host == _HOST and pid.isdigit():
         return not _pid_alive(int(pid))
+    if not rest:                      # an older name without its writer: nobody owns it
+        return True
     try:
         return now - item.lstat().st_mtime > STALE_AFTER_S
     except FileNotFoundError:
@@ -74,11 +83,11 @@ def remove_stale(folder) -> list[Path]:
     now = time.time()
     removed = []
     for item in folder.glob(f".*{PARTIAL}*"):
-        if _is_stale(item, now):
+        if _is_stale(item, PARTIAL, now):
             _remove(item)
             removed.append(item)
-    aside = sorted(folder.glob(f".*{OLD}*"), key=lambda p: p.stat().st_mtime,
-                   reverse=True)
+    aside = sorted((p for p in folder.glob(f".*{OLD}*") if _is_stale(p, OLD, now)),
+                   key=lambda p: p.stat().st_mtime, reverse=True)
     for item in aside:
         name = item.name[1:].rpartition(OLD)[0]
         if not name:
@@ -97,8 +106,7 @@ def remove_stale(folder) -> list[Path]:
 def temporary_beside(dest: Path) -> Path:
     """A fresh hidden temporary path in ``dest``'s folder, named after ``dest``."""
     # the suffix is kept: some writers (pynwb, numpy) check or append it
-    return (dest.parent / f".{dest.name}{PARTIAL}{_HOST}-{os.getpid()}-"
-                          f"{uuid.uuid4().hex[:8]}{dest.suffix}")
+    return dest.parent / f".{dest.name}{PARTIAL}{_owner_tag()}{dest.suffix}"
 
 
 def _fsync(path: Path) -> None:
@@ -116,7 +124,7 @@ def _publish(tmp: Path, dest: Path, overwrite: bool, what: str) -> None:
         raise FileExistsError(_appeared(what, dest))
     if tmp.is_dir():
         if exists:
-            old = dest.parent / f".{dest.name}{OLD}{uuid.uuid4().hex[:8]}"
+            old = dest.parent / f".{dest.name}{OLD}{_owner_tag()}"
             os.rename(dest, old)
             os.rename(tmp, dest)
             _remove(old)

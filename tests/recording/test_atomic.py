@@ -161,3 +161,23 @@ def test_lazily_made_nan_activity_fails_the_save_and_leaves_nothing(tmp_path):
                                              r"found nan at index \(7, 1\)"):
         save_recording(lazy, dest)
     assert os.listdir(tmp_path) == []
+
+
+def test_a_live_writers_store_set_aside_is_left_alone_by_other_writers(tmp_path):
+    """An overwrite between its two renames is not undone by a save of another name."""
+    import hippo_probe._atomic as atomic
+
+    rec = make_network_recording()
+    save_recording(rec, tmp_path / "a.zarr")
+    live = tmp_path / f".a.zarr{atomic.OLD}{atomic._HOST}-{os.getpid()}-0000abcd"
+    os.rename(tmp_path / "a.zarr", live)
+    save_recording(rec, tmp_path / "b.zarr")          # cleans the folder first and last
+    assert live.exists() and not (tmp_path / "a.zarr").exists()
+    # once that writer is gone, the next write in the folder restores the copy
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    orphan = tmp_path / f".a.zarr{atomic.OLD}{atomic._HOST}-{dead}-0000abcd"
+    os.rename(live, orphan)
+    with pytest.warns(UserWarning, match="a.zarr was being replaced .* restored"):
+        save_recording(rec, tmp_path / "b.zarr", overwrite=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.zarr", "b.zarr"]

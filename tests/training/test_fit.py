@@ -327,7 +327,7 @@ def test_a_named_network_not_in_this_installation_is_a_clear_error(tmp_path, mon
                                          "a clone"):
         hp.load_pretrained("generalized_compass")
     with pytest.raises(ValueError, match=r"'generalized' is not in this installation \(its "
-                                         "training has not finished\)"):
+                                         r"training has not finished\)"):
         hp.load_pretrained("generalized")
 
 

@@ -9,7 +9,7 @@ main`` passes its own clone).
 
 import time
 
-from ._cli_common import check_output, one_of
+from ._cli_common import check_output, count, one_of
 
 # the names only: the builders (matplotlib, torch) are imported when a command runs
 from .paper import FIGURES
@@ -31,6 +31,9 @@ def add_commands(sub):
                     "clone CLONE (CLONE/paper_figures/png/*.png, "
                     "CLONE/paper_figures/RESULTS.md); only with --size paper and every "
                     "figure")
+    jobs_help = ("runs made at once, each in its own process with its share of the "
+                 "cores (default: one per core, at most one per run); the numbers do not "
+                 "depend on it. Each run's messages go to OUT/<run>/log.txt when N > 1")
     p = sub.add_parser("main", help="the README's main job: world statistics and every "
                                     "paper figure, into one folder")
     p.add_argument("--out", default="figures", metavar="FOLDER",
@@ -39,6 +42,11 @@ def add_commands(sub):
                    help=size_help)
     p.add_argument("--cache", default=None, metavar="FOLDER", help=cache_help)
     p.add_argument("--refresh-tracked", default=None, metavar="CLONE", help=refresh_help)
+    p.add_argument("--jobs", type=count(1), default=None, metavar="N", help=jobs_help)
+    p.add_argument("--keep-cache", action="store_true",
+                   help="keep the cached recordings (OUT/cache, a few GB at the paper size) "
+                        "for a later run; by default they are removed once every figure "
+                        "and RESULTS.md are written (a --cache folder is always kept)")
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(run=_main)
     f = sub.add_parser("figures", help="regenerate the paper figures and RESULTS.md into "
@@ -57,6 +65,7 @@ def add_commands(sub):
                         f"each world's figures once per shipped training seed)")
     f.add_argument("--cache", default=None, metavar="FOLDER", help=cache_help)
     f.add_argument("--refresh-tracked", default=None, metavar="CLONE", help=refresh_help)
+    f.add_argument("--jobs", type=count(1), default=None, metavar="N", help=jobs_help)
     f.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     f.set_defaults(run=_figures)
 
@@ -96,7 +105,7 @@ def _figures(args, *, extra_tracked=()):
         "--cache", args.cache, kind="folder")
     from tqdm.auto import tqdm
 
-    from . import paper
+    from ._atomic import write_text
     from .paper import config
 
     worlds = getattr(args, "world", None) or config.WORLDS
@@ -112,15 +121,24 @@ def _figures(args, *, extra_tracked=()):
     cfgs = [config.for_run(base, world, seed) for world, seed in runs]
     t_all = time.time()
     names = args.only or FIGURES
-    jobs = [(cfg, name) for cfg in cfgs for name in names]
-    tqdm.write(f"runs: {', '.join(cfg.run for cfg in cfgs)}")
-    with tqdm(jobs, desc="figures", unit="figure", disable=args.no_progress) as bar:
-        for cfg, name in bar:
-            t0 = time.time()
-            bar.set_postfix_str(f"{cfg.run} {name}")
-            tqdm.write(f"== {cfg.run}: {name} ({args.size}) ==")
-            paper.builder(name).make(cfg, out / cfg.run)
-            tqdm.write(f"   {name} done in {time.time() - t0:.0f} s")
+    jobs = _jobs(getattr(args, "jobs", None), len(cfgs))
+    tqdm.write(f"runs: {', '.join(cfg.run for cfg in cfgs)}"
+               + (f" ({jobs} at once)" if jobs > 1 else ""))
+    with tqdm(total=len(cfgs) * len(names), desc="figures", unit="figure",
+              disable=args.no_progress) as bar:
+        def report(run, name, seconds):
+            bar.update(1)
+            tqdm.write(f"   {run}: {name} done in {seconds:.0f} s")
+            timings.append((run, name, seconds))
+
+        timings = []
+        if jobs == 1:
+            for cfg in cfgs:
+                _make_run(cfg, names, out, report, echo=tqdm.write)
+        else:
+            _make_runs_at_once(cfgs, names, out, report, jobs)
+    write_text(out / "timings.md", _timings_table(timings, args.size, jobs,
+                                                  time.time() - t_all), what="timings")
     primary = cfgs[0]
     shown = [out / primary.run / f"{name}.png" for name in names]
     from .paper.results import NOTES, write_results
@@ -154,6 +172,89 @@ def _figures(args, *, extra_tracked=()):
     print(f"all figures in {out}/ ({time.time() - t_all:.0f} s)")
 
 
+def _jobs(requested: int | None, n_runs: int) -> int:
+    """Processes for the runs: ``requested``, or one per usable core, never more than
+    there are runs."""
+    import os
+
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
+        else (os.cpu_count() or 1)
+    return max(1, min(requested or cores, n_runs))
+
+
+def _make_run(cfg, names, out, report, echo=print):
+    """Every figure ``names`` of the run ``cfg`` into ``out/<run>/``; ``report(run, name,
+    seconds)`` after each."""
+    from . import paper
+
+    for name in names:
+        t0 = time.time()
+        echo(f"== {cfg.run}: {name} ({cfg.name}) ==")
+        paper.builder(name).make(cfg, out / cfg.run)
+        report(cfg.run, name, time.time() - t0)
+
+
+def _make_run_in_worker(cfg, names, out, queue, threads):
+    """:func:`_make_run` in a worker process: ``threads`` threads for torch and numba,
+    the run's messages into ``out/<run>/log.txt``, each figure's time onto ``queue``."""
+    import contextlib
+
+    import numba
+    import torch
+
+    torch.set_num_threads(threads)
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    (out / cfg.run).mkdir(parents=True, exist_ok=True)
+    with open(out / cfg.run / "log.txt", "w") as log, contextlib.redirect_stdout(log):
+        _make_run(cfg, names, out, lambda *timing: queue.put(timing))
+
+
+def _make_runs_at_once(cfgs, names, out, report, jobs):
+    """The runs in ``jobs`` processes (spawned: no state of this one is shared), the
+    cores split evenly between them; a run that fails stops the rest."""
+    import multiprocessing
+    import queue as queues
+    from concurrent.futures import ProcessPoolExecutor
+
+    cores = _jobs(None, 10 ** 6)
+    threads = max(1, cores // jobs)
+    context = multiprocessing.get_context("spawn")
+    with context.Manager() as manager, ProcessPoolExecutor(jobs, mp_context=context) as pool:
+        timings = manager.Queue()
+        futures = [pool.submit(_make_run_in_worker, cfg, names, out, timings, threads)
+                   for cfg in cfgs]
+        left = len(cfgs) * len(names)
+        while left:
+            try:
+                report(*timings.get(timeout=1.0))
+                left -= 1
+            except queues.Empty:
+                failed = [f for f in futures if f.done() and f.exception() is not None]
+                if failed:
+                    for f in futures:
+                        f.cancel()
+                    raise failed[0].exception()
+        for f in futures:
+            f.result()
+
+
+def _timings_table(timings, size, jobs, wall_s) -> str:
+    """The seconds each figure of each run took, as a Markdown table."""
+    runs = list(dict.fromkeys(run for run, _, _ in timings))
+    names = list(dict.fromkeys(name for _, name, _ in timings))
+    took = {(run, name): s for run, name, s in timings}
+    lines = [f"# Time per figure (size {size}, {jobs} run(s) at once)", "",
+             "Seconds per figure; the first figure of a run to need a recording makes it.",
+             "", "| run | " + " | ".join(names) + " | total |",
+             "|---" * (len(names) + 2) + "|"]
+    for run in runs:
+        row = [took.get((run, name), float("nan")) for name in names]
+        lines.append(f"| {run} | " + " | ".join(f"{s:.0f}" for s in row)
+                     + f" | {sum(row):.0f} |")
+    lines += ["", f"Wall time of the figures: {wall_s:.0f} s.", ""]
+    return "\n".join(lines)
+
+
 def _main(args):
     out = check_output("--out", args.out, kind="folder")
     if args.cache is not None:
@@ -171,5 +272,10 @@ def _main(args):
     print(f"saved {out / 'example_trials.png'}")
     _figures(args.__class__(out=args.out, size=args.size, only=None, cache=args.cache,
                             refresh_tracked=args.refresh_tracked, world=None,
-                            no_progress=args.no_progress),
+                            jobs=args.jobs, no_progress=args.no_progress),
              extra_tracked=(out / "example_trials.png",))
+    if args.cache is None and not args.keep_cache:
+        import shutil
+
+        shutil.rmtree(out / "cache", ignore_errors=True)
+        print(f"removed the cached recordings ({out / 'cache'}; --keep-cache keeps them)")

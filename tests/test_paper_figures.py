@@ -26,12 +26,13 @@ def _git_status():
 @pytest.fixture(scope="module")
 def figures_run(tmp_path_factory):
     """One tiny run of ``hippo-probe main`` (world statistics, then ``figures``: the slow
-    part of this module), with the checkout's git status before and after it."""
+    part of this module), two runs at once, with the checkout's git status before and
+    after it."""
     out = tmp_path_factory.mktemp("figures")
     before = _git_status()
     run = subprocess.run([sys.executable, "-m", "hippo_probe.cli", "main", "--size",
-                          "tiny", "--out", str(out)], capture_output=True, text=True,
-                         cwd=ROOT, timeout=1200)
+                          "tiny", "--jobs", "2", "--out", str(out)], capture_output=True,
+                         text=True, cwd=ROOT, timeout=1200)
     assert run.returncode == 0, run.stderr[-4000:]
     return out, before, _git_status()
 
@@ -55,10 +56,27 @@ def test_figures_write_only_under_out(figures_run):
     assert "every verdict means nothing" in (out / "RESULTS.md").read_text().split("\n")[2]
     assert (out / "network_vs_rodent.json").exists()
     assert (out / "ablation.png").stat().st_size > 1000
-    assert (out / "cache" / "paper-tiny").is_dir()       # the cached recordings, under out
+    assert not (out / "cache").exists()     # the cached recordings, removed at the end
+    assert "| darkness-seed0 | " in (out / "timings.md").read_text()
     if before is None:
         pytest.skip("not a git checkout")
     assert after == before
+
+
+def test_runs_made_at_once_give_the_numbers_of_runs_made_in_turn(figures_run, tmp_path):
+    """Two processes of one thread each (main's --jobs 2) write the figures' numbers byte
+    for byte as one process running the runs in turn."""
+    from hippo_probe.cli import main
+
+    at_once = figures_run[0]
+    assert main(["figures", "--size", "tiny", "--only", "fig2", "--jobs", "1",
+                 "--no-progress", "--out", str(tmp_path)]) == 0
+    made = sorted(tmp_path.glob("*/fig2.json"))
+    assert len(made) >= 2
+    for path in made:
+        run = path.parent.name
+        assert path.read_bytes() == (at_once / run / "fig2.json").read_bytes(), run
+        assert "fig2 (tiny)" in (at_once / run / "log.txt").read_text()
 
 
 @pytest.mark.parametrize("extra", [["figures", "--size", "tiny"],

@@ -245,8 +245,9 @@ def _narrow(u32, out_bits):
 
 
 @numba.njit(fastmath=True, cache=True, inline="always", error_model="numpy")
-def _forward_row(z, bias, w_peep, c, gates_tb, c_new, tc, h):
+def _forward_row(z, bias, w_peep, c, gates_tb, c_new, tc, h, nonneg):
     """One sequence's step: gates, cell and h from its pre-activation product row z (4H,).
+    With ``nonneg``, ``tc`` is ``relu(tanh c)`` and ``h = o * relu(tanh c)``.
 
     One short loop per quantity over the H units, on purpose: LLVM vectorises a loop only
     when it can check cheaply that its arrays don't overlap, and one loop writing all seven
@@ -269,15 +270,21 @@ def _forward_row(z, bias, w_peep, c, gates_tb, c_new, tc, h):
         o[j] = _sigmoid(zo[j] + b_o[j] + w_o[j] * c_new[j])
     for j in range(H):
         tc[j] = _tanh(c_new[j])
+    if nonneg:
+        for j in range(H):
+            tc[j] = max(tc[j], np.float32(0.0))
     for j in range(H):
         h[j] = o[j] * tc[j]
 
 
 @numba.njit(fastmath=True, cache=True, inline="always", error_model="numpy")
-def _backward_row(dh, gates_tb, tc, c_prev, c, dc, w_peep, dz, dct, d_bias, d_peep):
+def _backward_row(dh, gates_tb, tc, c_prev, c, dc, w_peep, dz, dct, d_bias, d_peep,
+                  nonneg):
     """One sequence's backward step: pre-activation gradients dz (4H,: i, f, g, o) from
     ``dh``; ``dc`` goes from dc_t to dc_{t-1} in place; dz is added into the bias and
     peephole gradients. ``dct`` is scratch (H,). Short loops, as in :func:`_forward_row`.
+    With ``nonneg`` (``tc = relu(tanh c)``) no gradient reaches a cell through a unit
+    whose output is cut to 0.
     """
     H = c.shape[0]
     di, df, dg, do = dz[:H], dz[H:2 * H], dz[2 * H:3 * H], dz[3 * H:]
@@ -286,8 +293,13 @@ def _backward_row(dh, gates_tb, tc, c_prev, c, dc, w_peep, dz, dct, d_bias, d_pe
     p_i, p_f, p_o = d_peep[0], d_peep[1], d_peep[2]
     for j in range(H):
         do[j] = dh[j] * tc[j] * o[j] * (_ONE - o[j])
-    for j in range(H):
-        dct[j] = dc[j] + dh[j] * o[j] * (_ONE - tc[j] * tc[j]) + do[j] * w_o[j]
+    if nonneg:
+        for j in range(H):
+            slope = _ONE - tc[j] * tc[j] if tc[j] > 0 else np.float32(0.0)
+            dct[j] = dc[j] + dh[j] * o[j] * slope + do[j] * w_o[j]
+    else:
+        for j in range(H):
+            dct[j] = dc[j] + dh[j] * o[j] * (_ONE - tc[j] * tc[j]) + do[j] * w_o[j]
     for j in range(H):
         di[j] = dct[j] * g[j] * i[j] * (_ONE - i[j])
     for j in range(H):
@@ -307,7 +319,8 @@ def _backward_row(dh, gates_tb, tc, c_prev, c, dc, w_peep, dz, dct, d_bias, d_pe
 
 
 @numba.njit(fastmath=True, cache=True, error_model="numpy")
-def _bf16_forward_step(t, z_bits, bias, w_peep, gates, cells, tanh_cells, hidden, xh_bits):
+def _bf16_forward_step(t, z_bits, bias, w_peep, gates, cells, tanh_cells, hidden, xh_bits,
+                       nonneg):
     """Step t's gates and state from its pre-activation product ``z`` (bf16, (B, 4H)).
 
     Writes gates[t] (post-activation, (B, 4, H)), cells[t + 1], tanh_cells[t],
@@ -323,28 +336,28 @@ def _bf16_forward_step(t, z_bits, bias, w_peep, gates, cells, tanh_cells, hidden
         _widen(z_bits[b], z_u)
         h = hidden[t + 1, b]
         _forward_row(z_u.view(np.float32), bias, w_peep, cells[t, b], gates[t, b],
-                     cells[t + 1, b], tanh_cells[t, b], h)
+                     cells[t + 1, b], tanh_cells[t, b], h, nonneg)
         if t + 1 < xh_bits.shape[0]:
             h_f[:] = h
             _narrow(h_u, xh_bits[t + 1, b, F:])
 
 
 @numba.njit(fastmath=True, cache=True, error_model="numpy")
-def _fp32_forward_step(t, z, bias, w_peep, gates, cells, tanh_cells, hidden, xh):
+def _fp32_forward_step(t, z, bias, w_peep, gates, cells, tanh_cells, hidden, xh, nonneg):
     """:func:`_bf16_forward_step` with a float32 product ``z`` and operand buffer ``xh``."""
     _, B, _, H = gates.shape
     F = xh.shape[2] - H
     for b in range(B):
         h = hidden[t + 1, b]
         _forward_row(z[b], bias, w_peep, cells[t, b], gates[t, b], cells[t + 1, b],
-                     tanh_cells[t, b], h)
+                     tanh_cells[t, b], h, nonneg)
         if t + 1 < xh.shape[0]:
             xh[t + 1, b, F:] = h
 
 
 @numba.njit(fastmath=True, cache=True, error_model="numpy")
 def _bf16_backward_step(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec_bits,
-                        use_rec, dc, dg_bits, d_bias, d_peep):
+                        nonneg, use_rec, dc, dg_bits, d_bias, d_peep):
     """Step t of the backward recurrence, fused.
 
     ``dh = d_hidden[t] + rec``; rec is the bf16 product dg_{t+1} W_h, or at the last step
@@ -370,13 +383,13 @@ def _bf16_backward_step(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec
         for j in range(H):
             dh[j] = dhb[j] + rec[j]
         _backward_row(dh, gates[t, b], tanh_cells[t, b], cells[t, b], cells[t + 1, b], dc[b],
-                      w_peep, dz, dct, d_bias, d_peep)
+                      w_peep, dz, dct, d_bias, d_peep, nonneg)
         _narrow(dz_u, dg_bits[t, b])
 
 
 @numba.njit(fastmath=True, cache=True, error_model="numpy")
-def _fp32_backward_step(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec, use_rec,
-                        dc, d_gates, d_bias, d_peep):
+def _fp32_backward_step(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec, nonneg,
+                        use_rec, dc, d_gates, d_bias, d_peep):
     """:func:`_bf16_backward_step` with a float32 product ``rec``, writing float32
     pre-activation gradients into ``d_gates[t]``."""
     _, B, _, H = gates.shape
@@ -389,10 +402,10 @@ def _fp32_backward_step(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec
         for j in range(H):
             dh[j] = dhb[j] + r[j]
         _backward_row(dh, gates[t, b], tanh_cells[t, b], cells[t, b], cells[t + 1, b], dc[b],
-                      w_peep, d_gates[t, b], dct, d_bias, d_peep)
+                      w_peep, d_gates[t, b], dct, d_bias, d_peep, nonneg)
 
 
-def _forward_step_torch(t, z, bias, w_peep, gates, cells, tanh_cells, hidden, xh):
+def _forward_step_torch(t, z, bias, w_peep, gates, cells, tanh_cells, hidden, xh, nonneg):
     """The forward step kernels' math with torch ops, any dtype and device (the GPU path;
     the reference the numba kernels are tested against)."""
     B, H = cells.shape[1:]
@@ -403,6 +416,8 @@ def _forward_step_torch(t, z, bias, w_peep, gates, cells, tanh_cells, hidden, xh
     c_new = i_f[:, 1] * c + i_f[:, 0] * g
     o = torch.sigmoid(zf[:, 3] + w_peep[2] * c_new)
     tc = torch.tanh(c_new)
+    if nonneg:
+        tc = torch.relu(tc)
     gates[t, :, :2] = i_f
     gates[t, :, 2] = g
     gates[t, :, 3] = o
@@ -413,14 +428,15 @@ def _forward_step_torch(t, z, bias, w_peep, gates, cells, tanh_cells, hidden, xh
         xh[t + 1, :, xh.shape[2] - H:] = hidden[t + 1]
 
 
-def _backward_step_torch(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec, use_rec,
-                         dc, dg_out, d_bias, d_peep):
+def _backward_step_torch(t, gates, cells, tanh_cells, w_peep, d_hidden, d_hn, rec, nonneg,
+                         use_rec, dc, dg_out, d_bias, d_peep):
     """The backward step kernels' math with torch ops, any dtype and device."""
     i, f, g, o = gates[t].unbind(1)
     tc, c_prev = tanh_cells[t], cells[t]
     dh = d_hidden[t] + (rec.to(d_hn.dtype) if use_rec else d_hn)
     do = dh * tc * o * (1 - o)
-    dc += dh * o * (1 - tc * tc) + do * w_peep[2]
+    slope = (1 - tc * tc) * (tc > 0) if nonneg else 1 - tc * tc
+    dc += dh * o * slope + do * w_peep[2]
     di = dc * g * i * (1 - i)
     df = dc * c_prev * f * (1 - f)
     dg = dc * i * (1 - g * g)
@@ -442,7 +458,7 @@ def _as_numpy(tensor):
 class _FusedPeepholeLSTMFunction(torch.autograd.Function):
     """The training path: :class:`_PeepholeLSTMFunction`'s math, fused per step.
 
-    ``apply(x, h0, c0, w_x, w_h, bias, w_peep, bf16, kernels)``. Layout is batch-major,
+    ``apply(x, h0, c0, w_x, w_h, bias, w_peep, bf16, kernels, nonneg)``. Layout is batch-major,
     (T, B, 4, H) with gates i, f, g, o: one step's pre-activations are ONE (B, F+H) x
     (F+H, 4H) product of ``[x_t, h_{t-1}]`` (kept as a buffer ``xh`` in the matmul dtype)
     with ``[W_x, W_h]^T`` -- input projection and recurrence together -- and every weight
@@ -451,11 +467,13 @@ class _FusedPeepholeLSTMFunction(torch.autograd.Function):
     rounding at the end), else in the inputs' dtype. The saved gates, cell states and h,
     the cell-gradient recurrence and the bias and peephole gradients stay in the inputs'
     dtype. ``kernels`` is "numba" (CPU, float32) or "torch" (any device and dtype; also
-    the reference the numba kernels are tested against).
+    the reference the numba kernels are tested against). ``nonneg``: ``h = o * relu(tanh
+    c)`` (the non-negative variants of :mod:`.variants`).
     """
 
     @staticmethod
-    def forward(ctx, x, h0, c0, w_x, w_h, bias, w_peep, bf16=False, kernels="numba"):
+    def forward(ctx, x, h0, c0, w_x, w_h, bias, w_peep, bf16=False, kernels="numba",
+                nonneg=False):
         T, B, F = x.shape
         H = w_h.shape[1]
         mm_dtype = torch.bfloat16 if bf16 else x.dtype
@@ -473,6 +491,7 @@ class _FusedPeepholeLSTMFunction(torch.autograd.Function):
         w_t = w_cat.t().contiguous()         # a transposed view was 1.4x slower per step
         bias4, w_peep = bias.detach().view(4, H), w_peep.detach()
         arrays = (z, bias4, w_peep, gates, cells, tanh_cells, hidden, xh)
+        nonneg = bool(nonneg)
         if kernels == "numba":
             step = _bf16_forward_step if bf16 else _fp32_forward_step
             arrays = tuple(_as_numpy(a) for a in arrays)
@@ -480,9 +499,9 @@ class _FusedPeepholeLSTMFunction(torch.autograd.Function):
             step = _forward_step_torch
         for t in range(T):
             torch.mm(xh[t], w_t, out=z)
-            step(t, *arrays)
+            step(t, *arrays, nonneg)
         ctx.save_for_backward(xh, w_x, w_h, w_peep, gates, cells, tanh_cells)
-        ctx.bf16, ctx.kernels = bf16, kernels
+        ctx.bf16, ctx.kernels, ctx.nonneg = bf16, kernels, nonneg
         h_seq = hidden[1:]
         return h_seq, h_seq[-1].clone(), cells[-1].clone()
 
@@ -501,11 +520,11 @@ class _FusedPeepholeLSTMFunction(torch.autograd.Function):
         rec = gates.new_zeros(B, H, dtype=mm_dtype)                 # dg_{t+1} W_h
         d_bias = gates.new_zeros(4, H)
         d_peep = gates.new_zeros(3, H)
-        arrays = (gates, cells, tanh_cells, w_peep.detach(), d_hidden, d_hn, rec)
+        arrays = (gates, cells, tanh_cells, w_peep.detach(), d_hidden, d_hn, rec, ctx.nonneg)
         state = (dc, d_gates, d_bias, d_peep)
         if ctx.kernels == "numba":
             step = _bf16_backward_step if ctx.bf16 else _fp32_backward_step
-            arrays = tuple(_as_numpy(a) for a in arrays)
+            arrays = (*(_as_numpy(a) for a in arrays[:-1]), arrays[-1])
             state = tuple(_as_numpy(a) for a in state)
         else:
             step = _backward_step_torch
@@ -520,7 +539,7 @@ class _FusedPeepholeLSTMFunction(torch.autograd.Function):
         if ctx.needs_input_grad[0]:
             d_x = torch.mm(dg_all, w_x.detach().to(mm_dtype)).to(dtype).view(T, B, F)
         return (d_x, dh0, dc, d_w[:, :F].contiguous(), d_w[:, F:].contiguous(),
-                d_bias.view(4 * H), d_peep, None, None)
+                d_bias.view(4 * H), d_peep, None, None, None)
 
 
 class PeepholeLSTM(nn.Module):

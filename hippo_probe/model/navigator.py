@@ -34,7 +34,8 @@ class Navigator(nn.Module):
                              torch.tensor(config.input_scale, dtype=torch.float32))
         if config.variant in ("nonneg", "dale"):
             self.lstm = VariantLSTM(config.input_size, config.hidden_size, config.forget_bias,
-                                    nonneg=True, dale=config.variant == "dale")
+                                    precision=config.precision, nonneg=True,
+                                    dale=config.variant == "dale")
         else:
             self.lstm = PeepholeLSTM(config.input_size, config.hidden_size,
                                      config.forget_bias, precision=config.precision)

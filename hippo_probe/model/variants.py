@@ -23,8 +23,10 @@ labelled as a departure from the study:
     activity at the true position; the position estimate is the decoded centre
     ``sum_i p_i mu_i`` (Banino et al. 2018), so its error compares with the others'.
 
-The ``nonneg`` and ``dale`` variants run the LSTM by plain autograd
-(:func:`~hippo_probe.model.lstm.peephole_step`), in float32, not the fused kernels of the faithful network.
+The ``nonneg`` and ``dale`` variants train on the faithful network's fused kernels (its
+``nonneg`` option; Dale's weights ``|V| * s`` enter them as the recurrent weights, with
+autograd through the sign mask), in the same precision; a forward pass autograd does not
+record runs the plain step (:func:`~hippo_probe.model.lstm.peephole_step`).
 
 References
 ----------
@@ -45,7 +47,7 @@ import torch
 from torch import nn
 
 from .config import VARIANTS  # noqa: F401  (the names, defined without torch)
-from .lstm import PeepholeLSTM, peephole_step
+from .lstm import PeepholeLSTM, _FusedPeepholeLSTMFunction, peephole_step
 
 #: Fraction of excitatory units under Dale's law (cortex: about 80%).
 EXCITATORY_FRACTION = 0.8
@@ -56,7 +58,7 @@ class VariantLSTM(PeepholeLSTM):
 
     Parameters
     ----------
-    input_size, hidden_size, forget_bias
+    input_size, hidden_size, forget_bias, precision
         As :class:`~hippo_probe.model.lstm.PeepholeLSTM`.
     nonneg : bool
         ``h = o * relu(tanh(c))`` instead of ``o * tanh(c)``.
@@ -69,8 +71,8 @@ class VariantLSTM(PeepholeLSTM):
     """
 
     def __init__(self, input_size: int, hidden_size: int = 256, forget_bias: float = 1.0,
-                 *, nonneg: bool = True, dale: bool = False):
-        super().__init__(input_size, hidden_size, forget_bias, precision="fp32")
+                 precision: str = "fp32", *, nonneg: bool = True, dale: bool = False):
+        super().__init__(input_size, hidden_size, forget_bias, precision=precision)
         self.nonneg, self.dale = bool(nonneg), bool(dale)
         sign = torch.ones(hidden_size)
         if self.dale:
@@ -94,6 +96,14 @@ class VariantLSTM(PeepholeLSTM):
         h, c = state if state is not None else (x.new_zeros(B, self.hidden_size),
                                                 x.new_zeros(B, self.hidden_size))
         w_h = self.recurrent_weight()
+        args = (x, h, c, self.weight_x, w_h, self.bias, self.weight_peephole)
+        recorded = torch.is_grad_enabled() and any(a.requires_grad for a in args)
+        on_cpu = x.device.type == "cpu"
+        if recorded and (self.precision == "bf16" or (on_cpu and x.dtype == torch.float32)):
+            bf16 = self.precision == "bf16"
+            h_seq, h, c = _FusedPeepholeLSTMFunction.apply(
+                *args, bf16, "numba" if on_cpu else "torch", self.nonneg)
+            return h_seq, (h, c)
         xw = x @ self.weight_x.t()          # the input projection of every step at once
         out = []
         for t in range(x.shape[0]):

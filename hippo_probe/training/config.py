@@ -165,10 +165,6 @@ class TrainConfig:
             check_positive("max_hours", self.max_hours)
         check_option("variant", self.variant, VARIANTS)
         check_number("activity_l1", self.activity_l1, low=0, low_inclusive=True)
-        if self.variant in ("nonneg", "dale") and self.precision == "bf16":
-            raise ValueError(f"`precision` 'bf16' is not available for the "
-                             f"{self.variant!r} variant (it trains by plain autograd in "
-                             f"float32); use 'auto' or 'fp32'")
         if self.snapshot_every is not None:
             check_positive("snapshot_every", self.snapshot_every, integer=True)
 

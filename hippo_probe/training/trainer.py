@@ -347,8 +347,6 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
 def _fit_pinned(config, run_dir, progress, cache_dir, stop_after):
     """``_fit`` with the precision resolved and the process's threads pinned."""
     precision = resolve_precision(config.precision)
-    if config.variant in ("nonneg", "dale"):
-        precision = "fp32"          # these variants train by plain autograd in float32
     if precision == "bf16" and config.device == "cpu" and not native_bf16():
         warnings.warn("`precision` 'bf16' on a CPU without AVX512-BF16 or AMX: oneDNN "
                       "emulates it, ~20x slower than fp32 here; use precision='auto'",

@@ -5,6 +5,7 @@ from hippo_probe.model.lstm import (
     PeepholeLSTM,
     _FusedPeepholeLSTMFunction,
     _PeepholeLSTMFunction,
+    peephole_step,
     reference_peephole_lstm,
 )
 
@@ -86,6 +87,37 @@ def test_module_trains_through_the_fused_path_and_infers_through_the_plain_one()
         torch.testing.assert_close(lstm(x)[0], plain, rtol=0, atol=0)
     assert not torch.equal(h.detach(), plain)      # two paths, differing in rounding only
     assert _rel(h.detach(), plain) < 1e-6
+
+
+def _nonneg_reference(x, h, c, w_x, w_h, bias, w_peep):
+    """Plain autograd of the non-negative cell, ``h = o * relu(tanh c)``."""
+    out = []
+    for t in range(x.shape[0]):
+        h, c = peephole_step(x[t] @ w_x.t(), h, c, w_h, bias, w_peep, nonneg=True)
+        out.append(h)
+    return torch.stack(out), h, c
+
+
+def test_the_non_negative_fused_path_is_the_non_negative_cell():
+    """``nonneg`` in the fused training path: finite differences in float64 (its torch
+    kernels), and the numba kernels in float32 against plain autograd of the same cell."""
+    nonneg = (False, "torch", True)
+    assert torch.autograd.gradcheck(
+        lambda *a: _FusedPeepholeLSTMFunction.apply(*a, *nonneg), _args(seed=5))
+    args64 = _args(T=40, B=4, F=3, H=16, seed=3)
+    with torch.no_grad():
+        for w in args64[3:]:
+            w.mul_(16 ** -0.5)
+    args32 = [a.detach().float().requires_grad_() for a in args64]
+    ref = _outputs_and_grads(_nonneg_reference, args64)
+    numba = _outputs_and_grads(
+        lambda *a: _FusedPeepholeLSTMFunction.apply(*a, False, "numba", True), args32)
+    assert (ref[0] == 0).float().mean() > 0.2        # the cut is exercised
+    for a, r in zip(numba, ref):
+        assert _rel(a, r) < 2e-6
+    # and it is not the faithful cell
+    faithful = _outputs_and_grads(lambda *a: _fused(*a, kernels="numba"), args32)
+    assert _rel(faithful[0], ref[0]) > 0.1
 
 
 def test_peepholes_matter():

@@ -30,6 +30,32 @@ def test_non_negative_outputs_are_non_negative_and_otherwise_the_same_cell(varia
         np.testing.assert_allclose(h[:1].detach(), torch.relu(h_f).detach(), atol=1e-6)
 
 
+@pytest.mark.parametrize("variant", ["nonneg", "dale"])
+def test_variants_train_through_the_fused_kernels_and_infer_through_the_plain_step(variant):
+    """Training (autograd recording) takes the fused kernels, with Dale's weights as the
+    recurrent weights; inference the plain step: the same cell up to rounding."""
+    net = _net(variant)
+    x = torch.randn(25, 3, 9)
+    h_train = net.lstm(x)[0]
+    with torch.no_grad():
+        h_infer = net.lstm(x)[0]
+    assert not torch.equal(h_train.detach(), h_infer)         # two paths
+    torch.testing.assert_close(h_train.detach(), h_infer, rtol=0, atol=2e-6)
+    # gradients reach the recurrent parameter through the sign mask as by plain autograd
+    h_train.sum().backward()
+    fused_grad = net.lstm.weight_h.grad.clone()
+    net.zero_grad()
+    from hippo_probe.model.lstm import peephole_step
+    h, c, w_h = torch.zeros(3, 16), torch.zeros(3, 16), net.lstm.recurrent_weight()
+    total = 0
+    for t in range(25):
+        h, c = peephole_step(x[t] @ net.lstm.weight_x.t(), h, c, w_h, net.lstm.bias,
+                             net.lstm.weight_peephole, nonneg=True)
+        total = total + h.sum()
+    total.backward()
+    torch.testing.assert_close(fused_grad, net.lstm.weight_h.grad, rtol=1e-4, atol=1e-5)
+
+
 def test_the_dale_mask_keeps_every_units_outgoing_signs_through_an_optimizer_step():
     net = _net("dale")
     sign = net.lstm.sign

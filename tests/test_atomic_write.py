@@ -104,6 +104,8 @@ ALLOWED = {
     ("recording/store.py", "_write"): "called inside save_recording's atomic_path (or on "
                                       "a URL, where object stores have no rename)",
     ("tasks.py", "_discard"): "renames a damaged cache block aside to delete it",
+    ("_main.py", "_make_run_in_worker"): "a run's message log, written as it goes so that "
+                                         "it shows how far a failed run got; not data",
     ("training/trainer.py", "_sole_trainer"): "a lock file (flock) holding the trainer's "
                                               "pid, not data: never read back as results",
 }

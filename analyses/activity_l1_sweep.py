@@ -67,9 +67,10 @@ def choose(rows, tolerance):
 
 
 def table(rows, chosen, tolerance) -> str:
-    lines = ["| L1 weight | best validation error (m) | vs weight 0 | test error after 100 s "
-             "(m) | mean h | silent units | lifetime sparseness | population sparseness |",
-             "|---|---|---|---|---|---|---|---|"]
+    header = ("| L1 weight | best validation error (m) | vs weight 0 | test error after "
+              "100 s (m) | mean h | silent units | lifetime sparseness | population "
+              "sparseness |")
+    lines = [header, "|---|---|---|---|---|---|---|---|"]
     base = next((r["best_validation_error_m"] for r in rows if r["weight"] == 0), np.nan)
     for r in rows:
         lines.append(f"| {r['weight']:g}{' (kept)' if r['weight'] == chosen else ''} | "
@@ -79,8 +80,8 @@ def table(rows, chosen, tolerance) -> str:
                      f"{r['fraction_silent']:.2f} | {r['lifetime_sparseness']:.3f} | "
                      f"{r['population_sparseness']:.3f} |")
     steps = sorted({r["steps"] for r in rows})
-    lines += ["", f"{', '.join(map(str, steps))} steps per run; the weight kept is the "
-              f"largest within {tolerance:.0%} of weight 0's best validation error."]
+    lines += ["", (f"{', '.join(map(str, steps))} steps per run; the weight kept is the "
+                   f"largest within {tolerance:.0%} of weight 0's best validation error.")]
     return "\n".join(lines) + "\n"
 
 

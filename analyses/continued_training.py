@@ -1,0 +1,118 @@
+"""A network trained on from a shipped one: validation error and arena probe against step.
+
+Reads the shipped network's training log and the continued run's (``--run``: its
+``log.json``, or its ``checkpoint.pt`` while it trains), and the arena probe fitted on
+the run's snapshots (``analyses/arena_readout.py --networks <shipped .pt>
+<run>/snapshots/step_*.pt --sizes 2000 --taus inf --kinds h leaky --out <probe>``), and
+draws both against the total step (the shipped run's steps, then the continuation's).
+
+    python analyses/continued_training.py [--base generalized] \\
+        [--run runs/generalized_s0_continued] [--probe analyses/data/arena_probe_steps] \\
+        [--out analyses/data/continued_training]
+
+Writes ``<out>/continued_training.png`` and ``continued_training.json``.
+"""
+
+import argparse
+import json
+import re
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+from hippo_probe._atomic import save_figure, write_text
+from hippo_probe.model import checkpoint
+from hippo_probe.pretrained import resolve_network_file
+
+LATE_S = 200.0          # the probe's accuracy is read at this time in the trial
+
+
+def validation(log) -> list[tuple[int, float]]:
+    return [(v["step"], v["mean_error_m"]) for v in log["validation"]]
+
+
+def run_log(run: Path) -> dict:
+    if (run / "log.json").exists():
+        return json.loads((run / "log.json").read_text())
+    return checkpoint.load(run / "checkpoint.pt")["log"]
+
+
+def probe_by_step(probe: Path, base_name: str) -> dict:
+    """{continuation step: {kind: test accuracy at LATE_S}} from the probe's JSON files
+    (the shipped network is step 0)."""
+    out = {}
+    for path in sorted(probe.glob("*.json")):
+        res = json.loads(path.read_text())
+        if "kinds" not in res:
+            continue
+        name = res["network"]
+        match = re.search(r"step_(\d+)", name)
+        if match is None and base_name not in name:
+            continue
+        step = int(match.group(1)) if match else 0
+        acc = {}
+        for kind, curve in res["kinds"].items():
+            row = curve["rows"][-1]
+            times = curve["times"]
+            acc[kind] = row["test_accuracy"][min(range(len(times)),
+                                                 key=lambda i: abs(times[i] - LATE_S))]
+        out[step] = acc
+    return dict(sorted(out.items()))
+
+
+def plot(base, cont, offset, probe, label):
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.6), layout="constrained")
+    a.plot(*zip(*base), color="0.5", lw=1, label="shipped run")
+    a.plot([offset + s for s, _ in cont], [e for _, e in cont], color="k", lw=1,
+           label="trained on (fresh schedule)")
+    a.axvline(offset, color="tab:blue", ls=":", lw=1)
+    a.set(xlabel="training step", ylabel="validation error (m)", yscale="log",
+          title=f"{label}: validation error")
+    a.legend(frameon=False)
+    steps = [offset + s for s in probe]
+    for kind, style in (("h", "o-k"), ("leaky_inf", "s-")):
+        values = [acc.get(kind) for acc in probe.values()]
+        if any(v is not None for v in values):
+            b.plot(steps, values, style, label={"h": "units h at 200 s (the study's)",
+                                                "leaky_inf": "running mean of h "
+                                                             "(variant)"}[kind])
+    b.axvline(offset, color="tab:blue", ls=":", lw=1)
+    b.set(xlabel="training step", ylabel="arena probe accuracy (2,000 trials)",
+          ylim=(0, None), title="arena probe (chance 0.01)")
+    b.legend(frameon=False, fontsize=8)
+    return fig
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--base", default="generalized", help="the shipped network trained on")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--run", type=Path, default=Path("runs/generalized_s0_continued"))
+    ap.add_argument("--probe", type=Path, default=Path("analyses/data/arena_probe_steps"))
+    ap.add_argument("--out", type=Path, default=Path("analyses/data/continued_training"))
+    a = ap.parse_args()
+    shipped = resolve_network_file(a.base, a.seed)
+    base_log = json.loads(shipped.with_suffix(".log.json").read_text())
+    log = run_log(a.run)
+    offset = log["base_network"]["steps_done"]
+    base, cont = validation(base_log), validation(log)
+    probe = probe_by_step(a.probe, shipped.stem)
+    a.out.mkdir(parents=True, exist_ok=True)
+    fig = plot(base, cont, offset, probe, f"{a.base} seed {a.seed}")
+    save_figure(fig, a.out / "continued_training.png", dpi=120)
+    summary = {"base": a.base, "seed": a.seed, "base_steps": offset,
+               "continued_steps": cont[-1][0], "stopped": log.get("stopped"),
+               "validation_error_at_restart_m": cont[0][1],
+               "best_validation_error_m": min(e for _, e in cont),
+               "best_step": min(cont, key=lambda v: v[1])[0],
+               "test": log.get("test"),
+               "probe_accuracy_at_200s": {str(offset + s): v for s, v in probe.items()}}
+    write_text(a.out / "continued_training.json", json.dumps(summary, indent=1))
+    print(json.dumps({k: v for k, v in summary.items() if k != "test"}, indent=1))
+
+
+if __name__ == "__main__":
+    main()

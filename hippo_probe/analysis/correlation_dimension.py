@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import xarray as xr
 
@@ -42,30 +43,60 @@ def _points(data, *, max_points, transient, seed):
     return arr[chosen], chosen, np.zeros(len(chosen), np.int64), info
 
 
+@numba.njit(cache=True)
+def _count_rows(dots, sq, i0, order, trial, theiler, edges, hist):
+    """Add the pairs (i, j > i) of rows ``i0 ..`` into ``hist`` (bin k: ``k`` edges <= d);
+    returns how many were counted.
+
+    ``dots`` holds the rows' dot products with every point (one BLAS product), and the
+    squared distance is formed as ``(|x_i|^2 + |x_j|^2) - 2 x_i.x_j``, the operations and
+    their order those of the array expression it replaced, without fast-math: the counts
+    are bit for bit the same, from one pass instead of five temporary arrays.
+    """
+    rows, m = dots.shape
+    n_edges = edges.shape[0]
+    # the bin is guessed from log d (the edges are log-spaced) and then corrected against
+    # the edges themselves, so it is exactly searchsorted's, whatever the edges
+    log_first = np.log(edges[0])
+    per_log = (n_edges - 1) / (np.log(edges[-1]) - log_first) if n_edges > 1 else 0.0
+    pairs = 0
+    for r in range(rows):
+        i = i0 + r
+        for j in range(i + 1, m):
+            if trial[i] == trial[j] and abs(order[i] - order[j]) < theiler:
+                continue                      # inside the Theiler window
+            d = np.sqrt(max(sq[i] + sq[j] - 2.0 * dots[r, j], 0.0))
+            guess = (np.log(d) - log_first) * per_log + 1.0 if d > 0 else 0.0
+            k = int(min(max(guess, 0.0), float(n_edges)))
+            while k < n_edges and edges[k] <= d:
+                k += 1
+            while k > 0 and edges[k - 1] > d:
+                k -= 1
+            hist[k] += 1
+            pairs += 1
+    return pairs
+
+
 def pair_counts(points, order, trial, theiler, edges, block=None):
     """Histogram of pairwise distances over ``edges``, computed in row blocks.
 
     Pairs (i < j) in the same trial with ``|order_i - order_j| < theiler`` are skipped
     (Theiler window). Returns (counts of d < edges[k] for each k, number of pairs).
-    Memory: one ``block x n`` distance matrix at a time.
+    Memory: one ``block x n`` matrix of dot products at a time.
     """
     block = CFG.block if block is None else block
+    points = np.ascontiguousarray(points, np.float64)
     m = len(points)
     sq = (points**2).sum(axis=1)
+    order = np.ascontiguousarray(order, np.int64)
+    trial = np.ascontiguousarray(trial, np.int64)
+    edges = np.ascontiguousarray(edges, np.float64)
     hist = np.zeros(len(edges) + 1, np.int64)
     n_pairs = 0
-    cols = np.arange(m)
     for i0 in range(0, m, block):
         i1 = min(m, i0 + block)
-        d2 = sq[i0:i1, None] + sq[None, :] - 2.0 * (points[i0:i1] @ points.T)
-        rows = np.arange(i0, i1)[:, None]
-        keep = cols[None, :] > rows
-        near = (trial[i0:i1, None] == trial[None, :]) & \
-            (np.abs(order[i0:i1, None] - order[None, :]) < theiler)
-        keep &= ~near
-        d = np.sqrt(np.maximum(d2[keep], 0.0))
-        hist += np.bincount(np.searchsorted(edges, d, side="right"), minlength=len(edges) + 1)
-        n_pairs += int(keep.sum())
+        n_pairs += _count_rows(points[i0:i1] @ points.T, sq, i0, order, trial, int(theiler),
+                               edges, hist)
     return np.cumsum(hist)[:-1], n_pairs
 
 

@@ -90,3 +90,36 @@ def test_bad_input():
     with pytest.warns(AnalysisWarning, match="correlation dimension is NaN"):
         res = hp.correlation_dimension(np.random.default_rng(0).normal(size=(12, 3)), theiler=0)
     assert np.isnan(res.attrs["dimension"])
+
+
+def _pair_counts_with_arrays(points, order, trial, theiler, edges, block):
+    """The array formulation pair_counts replaced (masks, sqrt, searchsorted per block)."""
+    m = len(points)
+    sq = (points**2).sum(axis=1)
+    hist = np.zeros(len(edges) + 1, np.int64)
+    n_pairs = 0
+    cols = np.arange(m)
+    for i0 in range(0, m, block):
+        i1 = min(m, i0 + block)
+        d2 = sq[i0:i1, None] + sq[None, :] - 2.0 * (points[i0:i1] @ points.T)
+        keep = cols[None, :] > np.arange(i0, i1)[:, None]
+        keep &= ~((trial[i0:i1, None] == trial[None, :])
+                  & (np.abs(order[i0:i1, None] - order[None, :]) < theiler))
+        d = np.sqrt(np.maximum(d2[keep], 0.0))
+        hist += np.bincount(np.searchsorted(edges, d, side="right"), minlength=len(edges) + 1)
+        n_pairs += int(keep.sum())
+    return np.cumsum(hist)[:-1], n_pairs
+
+
+def test_pair_counts_are_bit_for_bit_those_of_the_array_formulation():
+    """Same squared distances, same bins: the figures' numbers do not move (LSTM-like
+    states: tanh of correlated Gaussians, edges as correlation_dimension draws them)."""
+    rng = np.random.default_rng(3)
+    x = np.tanh(rng.standard_normal((1500, 8)) @ rng.standard_normal((8, 64)))
+    order = np.tile(np.arange(500), 3)
+    trial = np.repeat([0, 1, 2], 500)
+    edges = np.logspace(-3, np.log10(2 * np.sqrt((x ** 2).sum(1)).max()), 121)
+    ours = pair_counts(x, order, trial, theiler=10, edges=edges, block=256)
+    theirs = _pair_counts_with_arrays(x, order, trial, 10, edges, 256)
+    assert ours[1] == theirs[1]
+    np.testing.assert_array_equal(ours[0], theirs[0])

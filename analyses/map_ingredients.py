@@ -27,8 +27,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
-import numpy as np
 import torch
+from localization_vs_pf import errors, load, pf_estimate
 
 import hippo_probe as hp
 from hippo_probe._atomic import save_figure, write_text
@@ -45,30 +45,24 @@ def two_arena_trials(n_trials, world):
     return make_trials("specialized", n_trials, "test", 0, config=cfg)
 
 
-def localization_ratio(net, n_trials, world):
-    """Network / oracular PF mean error after 100 s on generalized test trials."""
-    batch = make_trials("generalized", n_trials, "test", 0, world=world)
-    pf = hp.baselines.particle_filter(batch, threads=1)
-    rec = hp.record(net, batch, baselines={"estimate_pf": pf.estimate + batch.start[None]})
-    err = hp.localization_error(rec, ["estimate", "estimate_pf"])
-    late = err.trial_time > 100
-    e = err.euclidean.where(late).mean("trial_time")
-    return float(e.sel(estimate="estimate") / e.sel(estimate="estimate_pf"))
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--networks", nargs="+", default=["generalized"])
+    ap.add_argument("--networks", nargs="+", default=["generalized"],
+                    help="shipped names (name@seed) or network files / run folders")
     ap.add_argument("--trials", type=int, default=120)
     ap.add_argument("--pf-trials", type=int, default=200)
     ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "map_ingredients"))
     a = ap.parse_args()
     torch.set_num_threads(1)
     out = Path(a.out)
-    rows, maps = [], {}
+    rows, maps, pf = [], {}, {}
     for name in a.networks:
         t0 = time.time()
-        net = hp.load_pretrained(name)
+        net = load(name)
+        if net.world not in pf:          # one particle filter per world, for every network
+            batch = make_trials("generalized", a.pf_trials, "test", 0,
+                                config=task_config("generalized", net.world))
+            pf[net.world] = batch, pf_estimate(batch)
         variant = (net.info.get("config") or {}).get("variant", "faithful")
         rec = hp.record(net, two_arena_trials(a.trials, net.world))
         card = hp.map_scorecard(rec, bin_size=0.03)
@@ -77,7 +71,8 @@ def main():
         dim = hp.intrinsic_dimension(rec, estimators="TwoNN")
         row = {"network": name, "variant": variant,
                "departure_from_study": variant != "faithful",
-               "error_over_pf_after_100s": localization_ratio(net, a.pf_trials, net.world),
+               "error_over_pf_after_100s":
+                   errors(net, *pf[net.world])["ratio_to_pf_t_gt_100s"],
                **{k: float(card[k]) for k in card.data_vars if card[k].ndim == 0},
                "place_fields": card.attrs["place_fields"],
                "global_remapping": card.attrs["global_remapping"],

@@ -124,6 +124,7 @@ def _figures(args, *, extra_tracked=()):
     jobs = _jobs(getattr(args, "jobs", None), len(cfgs))
     tqdm.write(f"runs: {', '.join(cfg.run for cfg in cfgs)}"
                + (f" ({jobs} at once)" if jobs > 1 else ""))
+    timings = []                        # (run, figure, seconds), as the figures end
     with tqdm(total=len(cfgs) * len(names), desc="figures", unit="figure",
               disable=args.no_progress) as bar:
         def report(run, name, seconds):
@@ -131,7 +132,6 @@ def _figures(args, *, extra_tracked=()):
             tqdm.write(f"   {run}: {name} done in {seconds:.0f} s")
             timings.append((run, name, seconds))
 
-        timings = []
         if jobs == 1:
             for cfg in cfgs:
                 _make_run(cfg, names, out, report, echo=tqdm.write)

@@ -40,19 +40,21 @@ def run_log(run: Path) -> dict:
     return checkpoint.load(run / "checkpoint.pt")["log"]
 
 
-def probe_by_step(probe: Path, base_name: str) -> dict:
-    """{continuation step: {kind: test accuracy at LATE_S}} from the probe's JSON files
-    (the shipped network is step 0)."""
+def probe_by_step(probe: Path, run_name: str, base_name: str) -> dict:
+    """{continuation step: {kind: test accuracy at LATE_S}} from the probe's JSON files:
+    the run's snapshots (``<run>_step_NNNNNN``) and the shipped network (step 0)."""
     out = {}
     for path in sorted(probe.glob("*.json")):
         res = json.loads(path.read_text())
         if "kinds" not in res:
             continue
         name = res["network"]
-        match = re.search(r"step_(\d+)", name)
-        if match is None and base_name not in name:
+        match = re.match(rf"{re.escape(run_name)}_step_(\d+)", name)
+        if match is None and not re.fullmatch(rf"(.+_)?{re.escape(base_name)}", name):
             continue
         step = int(match.group(1)) if match else 0
+        if step in out:
+            raise SystemExit(f"two probe results for step {step} in {probe}: keep one")
         acc = {}
         for kind, curve in res["kinds"].items():
             row = curve["rows"][-1]
@@ -97,15 +99,15 @@ def main():
     shipped = resolve_network_file(a.base, a.seed)
     base_log = json.loads(shipped.with_suffix(".log.json").read_text())
     log = run_log(a.run)
-    offset = log["base_network"]["steps_done"]
     base, cont = validation(base_log), validation(log)
-    probe = probe_by_step(a.probe, shipped.stem)
+    offset = log["base_network"].get("steps_done") or base[-1][0]
+    probe = probe_by_step(a.probe, a.run.name, shipped.stem)
     a.out.mkdir(parents=True, exist_ok=True)
     fig = plot(base, cont, offset, probe, f"{a.base} seed {a.seed}")
     save_figure(fig, a.out / "continued_training.png", dpi=120)
     summary = {"base": a.base, "seed": a.seed, "base_steps": offset,
                "continued_steps": cont[-1][0], "stopped": log.get("stopped"),
-               "validation_error_at_restart_m": cont[0][1],
+               "validation_error_at_restart_m": dict(cont).get(0),
                "best_validation_error_m": min(e for _, e in cont),
                "best_step": min(cont, key=lambda v: v[1])[0],
                "test": log.get("test"),

@@ -64,8 +64,9 @@ def _is_stale(item: Path, marker: str, now: float) -> bool:
         return not _pid_alive(int(pid))
     if not rest:                      # an older name without its writer: nobody owns it
         return True
-    try:
-        return now - item.lstat().st_mtime > STALE_AFTER_S
+    try:                              # a rename sets ctime, not a directory's mtime
+        st = item.lstat()
+        return now - max(st.st_mtime, st.st_ctime) > STALE_AFTER_S
     except FileNotFoundError:
         return False
 
@@ -86,17 +87,28 @@ def remove_stale(folder) -> list[Path]:
         if _is_stale(item, PARTIAL, now):
             _remove(item)
             removed.append(item)
-    aside = sorted((p for p in folder.glob(f".*{OLD}*") if _is_stale(p, OLD, now)),
-                   key=lambda p: p.stat().st_mtime, reverse=True)
-    for item in aside:
+    aside = []
+    for item in folder.glob(f".*{OLD}*"):
+        try:
+            if _is_stale(item, OLD, now):
+                aside.append((item.lstat().st_ctime, item))
+        except FileNotFoundError:     # another cleanup took it meanwhile
+            pass
+    for _, item in sorted(aside, reverse=True):
         name = item.name[1:].rpartition(OLD)[0]
         if not name:
             continue
         if (folder / name).exists() or (folder / name).is_symlink():
             _remove(item)
             removed.append(item)
-        else:
+            continue
+        try:
             os.rename(item, folder / name)          # the newest copy aside comes back
+        except OSError as err:
+            if err.errno in (errno.ENOENT, errno.EEXIST, errno.ENOTEMPTY):
+                continue              # another cleanup restored one first
+            raise
+        else:
             warnings.warn(f"{folder / name} was being replaced when its writer stopped; "
                           f"its previous version (set aside as {item.name}) is restored",
                           UserWarning, stacklevel=3)
@@ -126,7 +138,12 @@ def _publish(tmp: Path, dest: Path, overwrite: bool, what: str) -> None:
         if exists:
             old = dest.parent / f".{dest.name}{OLD}{_owner_tag()}"
             os.rename(dest, old)
-            os.rename(tmp, dest)
+            try:
+                os.rename(tmp, dest)
+            except OSError as err:    # another process put a store back at dest meanwhile
+                if err.errno in (errno.EEXIST, errno.ENOTEMPTY):
+                    raise FileExistsError(_appeared(what, dest)) from None
+                raise
             _remove(old)
             return
         try:                          # onto a non-empty directory this fails: no race

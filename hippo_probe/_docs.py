@@ -57,7 +57,8 @@ baseline : BaselineConfig, optional
     The baselines' settings (default ``BaselineConfig()``).""",
     "threads": """\
 threads : int, optional
-    Trials run in parallel on this many threads (default: all cores).""",
+    Trials run in parallel on this many threads (default: numba's thread count, all
+    cores unless ``NUMBA_NUM_THREADS`` or ``numba.set_num_threads`` says fewer).""",
 }
 
 _PLACEHOLDER = re.compile(r"^(?P<indent>[ \t]*)%\((?P<key>\w+)\)s[ \t]*$", re.MULTILINE)

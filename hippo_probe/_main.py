@@ -7,7 +7,9 @@ the clone, and only from a run of every figure at the paper size (``bash quickst
 main`` passes its own clone).
 """
 
+import os
 import time
+from contextlib import contextmanager
 
 from ._cli_common import check_output, count, one_of
 
@@ -32,8 +34,9 @@ def add_commands(sub):
                     "CLONE/paper_figures/RESULTS.md); only with --size paper and every "
                     "figure")
     jobs_help = ("runs made at once, each in its own process with its share of the "
-                 "cores (default: one per core, at most one per run); the numbers do not "
-                 "depend on it. Each run's messages go to OUT/<run>/log.txt when N > 1")
+                 "cores (default: one per core, at most one per run; each holds its own "
+                 "recordings in memory). The figures' numbers are the same; each run's "
+                 "messages go to OUT/<run>/log.txt when N > 1")
     p = sub.add_parser("main", help="the README's main job: world statistics and every "
                                     "paper figure, into one folder")
     p.add_argument("--out", default="figures", metavar="FOLDER",
@@ -137,6 +140,8 @@ def _figures(args, *, extra_tracked=()):
                 _make_run(cfg, names, out, report, echo=tqdm.write)
         else:
             _make_runs_at_once(cfgs, names, out, report, jobs)
+    order = {cfg.run: k for k, cfg in enumerate(cfgs)}
+    timings.sort(key=lambda timing: order[timing[0]])
     write_text(out / "timings.md", _timings_table(timings, args.size, jobs,
                                                   time.time() - t_all), what="timings")
     primary = cfgs[0]
@@ -175,8 +180,6 @@ def _figures(args, *, extra_tracked=()):
 def _jobs(requested: int | None, n_runs: int) -> int:
     """Processes for the runs: ``requested``, or one per usable core, never more than
     there are runs."""
-    import os
-
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
         else (os.cpu_count() or 1)
     return max(1, min(requested or cores, n_runs))
@@ -194,48 +197,74 @@ def _make_run(cfg, names, out, report, echo=print):
         report(cfg.run, name, time.time() - t0)
 
 
-def _make_run_in_worker(cfg, names, out, queue, threads):
-    """:func:`_make_run` in a worker process: ``threads`` threads for torch and numba,
-    the run's messages into ``out/<run>/log.txt``, each figure's time onto ``queue``."""
+#: Thread counts of the native libraries, read when they load: set for the workers before
+#: they start (torch's OpenMP pool, once started, keeps spinning beside a second one).
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                    "NUMBA_NUM_THREADS")
+
+
+def _make_run_in_worker(cfg, names, out, queue):
+    """:func:`_make_run` in a worker process (its threads set by :data:`THREAD_VARIABLES`),
+    the run's messages and warnings into ``out/<run>/log.txt``, each figure's time onto
+    ``queue``."""
     import contextlib
 
-    import numba
-    import torch
-
-    torch.set_num_threads(threads)
-    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     (out / cfg.run).mkdir(parents=True, exist_ok=True)
-    with open(out / cfg.run / "log.txt", "w") as log, contextlib.redirect_stdout(log):
+    with open(out / cfg.run / "log.txt", "w") as log, contextlib.redirect_stdout(log), \
+            contextlib.redirect_stderr(log):
         _make_run(cfg, names, out, lambda *timing: queue.put(timing))
+
+
+@contextmanager
+def _environment(**variables):
+    """``os.environ`` with ``variables`` set, restored after (for spawned processes)."""
+    before = {k: os.environ.get(k) for k in variables}
+    os.environ.update(variables)
+    try:
+        yield
+    finally:
+        for k, v in before.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
 
 
 def _make_runs_at_once(cfgs, names, out, report, jobs):
     """The runs in ``jobs`` processes (spawned: no state of this one is shared), the
-    cores split evenly between them; a run that fails stops the rest."""
+    cores split evenly between them; a run that fails stops the others at once."""
     import multiprocessing
     import queue as queues
     from concurrent.futures import ProcessPoolExecutor
 
-    cores = _jobs(None, 10 ** 6)
-    threads = max(1, cores // jobs)
+    threads = str(max(1, _jobs(None, 10 ** 6) // jobs))
     context = multiprocessing.get_context("spawn")
-    with context.Manager() as manager, ProcessPoolExecutor(jobs, mp_context=context) as pool:
-        timings = manager.Queue()
-        futures = [pool.submit(_make_run_in_worker, cfg, names, out, timings, threads)
-                   for cfg in cfgs]
-        left = len(cfgs) * len(names)
-        while left:
-            try:
-                report(*timings.get(timeout=1.0))
-                left -= 1
-            except queues.Empty:
-                failed = [f for f in futures if f.done() and f.exception() is not None]
-                if failed:
-                    for f in futures:
-                        f.cancel()
-                    raise failed[0].exception()
-        for f in futures:
-            f.result()
+    with _environment(**dict.fromkeys(THREAD_VARIABLES, threads)), \
+            context.Manager() as manager:
+        pool = ProcessPoolExecutor(jobs, mp_context=context)
+        try:
+            timings = manager.Queue()
+            futures = [pool.submit(_make_run_in_worker, cfg, names, out, timings)
+                       for cfg in cfgs]
+            left = len(cfgs) * len(names)
+            while left:
+                try:
+                    report(*timings.get(timeout=1.0))
+                    left -= 1
+                except queues.Empty:
+                    failed = [f for f in futures if f.done() and f.exception() is not None]
+                    if failed:
+                        raise failed[0].exception()
+            for f in futures:
+                f.result()
+        except BaseException:
+            # the executor has no public way to stop a running task: without this, the
+            # other runs would go on (minutes to hours) before the error is shown
+            for process in list(getattr(pool, "_processes", {}).values()):
+                process.terminate()
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        pool.shutdown()
 
 
 def _timings_table(timings, size, jobs, wall_s) -> str:
@@ -278,4 +307,8 @@ def _main(args):
         import shutil
 
         shutil.rmtree(out / "cache", ignore_errors=True)
-        print(f"removed the cached recordings ({out / 'cache'}; --keep-cache keeps them)")
+        if (out / "cache").exists():
+            print(f"could not remove all of the cached recordings in {out / 'cache'}")
+        else:
+            print(f"removed the cached recordings ({out / 'cache'}; --keep-cache keeps "
+                  f"them)")

@@ -58,7 +58,8 @@ def _count_rows(dots, sq, i0, order, trial, theiler, edges, hist):
     # the bin is guessed from log d (the edges are log-spaced) and then corrected against
     # the edges themselves, so it is exactly searchsorted's, whatever the edges
     log_first = np.log(edges[0])
-    per_log = (n_edges - 1) / (np.log(edges[-1]) - log_first) if n_edges > 1 else 0.0
+    span = np.log(edges[-1]) - log_first
+    per_log = (n_edges - 1) / span if n_edges > 1 and span > 0 else 0.0
     pairs = 0
     for r in range(rows):
         i = i0 + r
@@ -67,7 +68,9 @@ def _count_rows(dots, sq, i0, order, trial, theiler, edges, hist):
                 continue                      # inside the Theiler window
             d = np.sqrt(max(sq[i] + sq[j] - 2.0 * dots[r, j], 0.0))
             guess = (np.log(d) - log_first) * per_log + 1.0 if d > 0 else 0.0
-            k = int(min(max(guess, 0.0), float(n_edges)))
+            if not guess >= 0.0:              # NaN from edges <= 0: walk from the start
+                guess = 0.0
+            k = int(min(guess, float(n_edges)))
             while k < n_edges and edges[k] <= d:
                 k += 1
             while k > 0 and edges[k - 1] > d:
@@ -91,12 +94,15 @@ def pair_counts(points, order, trial, theiler, edges, block=None):
     order = np.ascontiguousarray(order, np.int64)
     trial = np.ascontiguousarray(trial, np.int64)
     edges = np.ascontiguousarray(edges, np.float64)
+    if edges.ndim != 1 or edges.size == 0 or (np.diff(edges) <= 0).any():
+        raise ValueError(f"`edges` must be a non-empty increasing 1-D array; got "
+                         f"{edges.size} values")
     hist = np.zeros(len(edges) + 1, np.int64)
     n_pairs = 0
     for i0 in range(0, m, block):
         i1 = min(m, i0 + block)
-        n_pairs += _count_rows(points[i0:i1] @ points.T, sq, i0, order, trial, int(theiler),
-                               edges, hist)
+        n_pairs += _count_rows(points[i0:i1] @ points.T, sq, i0, order, trial,
+                               float(theiler), edges, hist)
     return np.cumsum(hist)[:-1], n_pairs
 
 

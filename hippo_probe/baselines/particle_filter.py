@@ -102,7 +102,6 @@ about how the brain solves hard navigation problems. NIPS 30 (the PF baselines).
 from __future__ import annotations
 
 import math
-import os
 from collections import namedtuple
 from concurrent.futures import ThreadPoolExecutor
 
@@ -223,7 +222,7 @@ def run_filter(batch, tables, table_of_trial, n_particles, start, config, baseli
     keep = np.unique(np.asarray(keep, dtype=np.int64))
     if keep.size and (keep.min() < 0 or keep.max() >= n_steps):
         raise ValueError(f"`keep` must hold steps in [0, {n_steps - 1}]; got {keep.tolist()}")
-    threads = check_positive("threads", (os.cpu_count() or 1) if threads is None else threads,
+    threads = check_positive("threads", numba.get_num_threads() if threads is None else threads,
                              integer=True)
     pf = baseline.particle_filter
     regularization = pf.regularization if regularization is None else regularization

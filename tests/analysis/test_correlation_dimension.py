@@ -123,3 +123,19 @@ def test_pair_counts_are_bit_for_bit_those_of_the_array_formulation():
     theirs = _pair_counts_with_arrays(x, order, trial, 10, edges, 256)
     assert ours[1] == theirs[1]
     np.testing.assert_array_equal(ours[0], theirs[0])
+
+
+@pytest.mark.parametrize("edges", [np.linspace(0.0, 6.0, 25), np.array([2.5]),
+                                   np.sort(np.random.default_rng(4).uniform(0, 6, 40))])
+def test_pair_counts_match_searchsorted_for_any_increasing_edges(edges):
+    """Edges from 0, a single edge, irregular edges: the bins are searchsorted's."""
+    rng = np.random.default_rng(5)
+    x = rng.normal(size=(200, 3))
+    x[1] = x[0]                                          # a distance of exactly 0
+    order, trial = np.arange(200), np.zeros(200, np.int64)
+    ours = pair_counts(x, order, trial, theiler=0, edges=edges, block=64)
+    theirs = _pair_counts_with_arrays(x, order, trial, 0, edges, 64)
+    assert ours[1] == theirs[1] == 200 * 199 // 2
+    np.testing.assert_array_equal(ours[0], theirs[0])
+    with pytest.raises(ValueError, match="`edges` must be a non-empty increasing"):
+        pair_counts(x, order, trial, theiler=0, edges=np.array([]))

@@ -23,10 +23,10 @@ WORLDS = ("darkness", "compass")
 def add_commands(sub):
     sizes = ("tiny", "full", "paper")
     size_help = ("data size, per shipped run (a world's training seed), from scratch on 2 "
-                 "quiet cores: full, 200 test trials, a few minutes a run; paper, the "
-                 "study's scale: 1,000 test trials and PF-SLAM on 100, about 9 minutes a "
-                 "run (35 minutes for the four shipped runs); tiny, a smoke test of a "
-                 "handful of trials")
+                 "quiet cores: full, 200 test trials, a few minutes in all; paper, the "
+                 "study's scale: 1,000 test trials and PF-SLAM on 100, about 6.5 minutes "
+                 "a run on one core (13 minutes for the four shipped runs, two at once); "
+                 "tiny, a smoke test of a handful of trials")
     cache_help = ("folder of the cached recordings, reused by later runs of the same size "
                   "(default: OUT/cache)")
     refresh_help = ("also copy the figures and RESULTS.md over the tracked copies of the "

@@ -6,14 +6,17 @@
 #
 #   nohup bash scripts/train_beyond.sh > logs/beyond.log 2>&1 &
 #
-# lane A  generalized_s0_continued: the shipped generalized network (seed 0) trained on
-#         with a fresh schedule (3e-4 -> 3e-5) for up to 60,000 more steps, the 1% rule
-#         checked from 15,000; snapshots every 2,500 steps for the arena probe against step
-#         (python analyses/arena_readout.py --networks runs/generalized_s0_continued/
-#          snapshots/step_*.pt --sizes 2000 --tau-size 2000
-#          --out analyses/data/arena_probe_steps)
+# lane A  the L1 sweep of the `nonneg` variant (scripts/sweep_activity_l1.sh), then the
+#         variants at the chosen weight
 # lane B  the map-ingredient variants on the generalized task, one seed, 20,000 steps each,
 #         each a labelled departure from the study (hippo_probe.model.variants)
+#
+# Done: the shipped generalized network (seed 0) trained on with a fresh schedule, ended by
+# the 1% rule after 15,000 more steps (docs/guides/results.md, "The generalized network
+# trained on"); to redo it:
+#   hippo-probe train --threads 1 --out runs/generalized_s0_continued --task generalized \
+#     --init-from generalized --init-seed 0 --steps 60000 --lr 3e-4 --lr-final 3e-5 \
+#     --snapshot-every 2500
 set -u
 cd "$(dirname "$0")/.."
 mkdir -p logs
@@ -28,8 +31,7 @@ train() {                       # NAME [options...]
 }
 
 lane_a() {
-  train generalized_s0_continued --task generalized --init-from generalized --init-seed 0 \
-    --steps 60000 --lr 3e-4 --lr-final 3e-5 --snapshot-every 2500
+  bash scripts/sweep_activity_l1.sh
 }
 lane_b() {
   train generalized_placecells_s0 --task generalized --variant placecells --init-seed 0 \

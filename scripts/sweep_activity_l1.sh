@@ -14,6 +14,10 @@ cd "$(dirname "$0")/.."
 mkdir -p logs
 for weight in 0 0.01 0.1 1; do
   name=sweep_nonneg_l1_$weight
+  if [ -f "runs/$name/log.json" ] && grep -q '"test"' "runs/$name/log.json"; then
+    echo "$(date -u +%FT%TZ) $name finished before; kept"     # its network and log are committed
+    continue
+  fi
   echo "$(date -u +%FT%TZ) start $name"
   hippo-probe train --threads 1 --checkpoint-minutes 5 --no-progress --out "runs/$name" \
     --task generalized --variant nonneg --activity-l1 "$weight" --init-seed 0 \

@@ -64,9 +64,11 @@ def _is_stale(item: Path, marker: str, now: float) -> bool:
         return not _pid_alive(int(pid))
     if not rest:                      # an older name without its writer: nobody owns it
         return True
-    try:                              # a rename sets ctime, not a directory's mtime
+    try:
         st = item.lstat()
-        return now - max(st.st_mtime, st.st_ctime) > STALE_AFTER_S
+        # a copy set aside is dated by its rename, which sets ctime, not a store's mtime
+        since = max(st.st_mtime, st.st_ctime) if marker == OLD else st.st_mtime
+        return now - since > STALE_AFTER_S
     except FileNotFoundError:
         return False
 

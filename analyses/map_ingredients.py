@@ -6,12 +6,17 @@ started at the centre, so the generalized networks' start-relative estimate is i
 arena frame), and scored by :func:`hippo_probe.map_scorecard` (rules fixed in
 ``ScorecardConfig``), beside its localization error against the oracular particle filter
 on ``--pf-trials`` generalized test trials, the median Skaggs information of its units as
-spikes (``hp.poisson_spikes`` at 5 Hz) and their TwoNN dimension. The variants
+spikes (``hp.poisson_spikes`` at 5 Hz), the fraction of its units in each class of
+:func:`hippo_probe.classify_cells`, their TwoNN dimension, and the accuracy at 200 s of
+the study's arena readout (Fig. 3F: a linear readout of the units fitted to convergence
+on ``--readout-trials`` specialized-task trials, :mod:`hippo_probe.paper.readout`, the
+same size for every network). The variants
 (``generalized_nonneg``, ``generalized_dale``, ``generalized_placecells``) are departures
 from the study; ``generalized`` is the study's network.
 
     python analyses/map_ingredients.py [--networks generalized ...] [--trials 120]
-        [--pf-trials 200] [--out analyses/data/map_ingredients]
+        [--pf-trials 200] [--readout-trials 4000] [--features cache/readout]
+        [--out analyses/data/map_ingredients]
 
 Writes ``<out>/scorecard.json``, ``scorecard.csv`` and ``map_ingredients.png`` (rate maps of
 the same 16 units in the two arenas, per network).
@@ -32,6 +37,7 @@ from localization_vs_pf import errors, load, pf_estimate
 
 import hippo_probe as hp
 from hippo_probe._atomic import save_figure, write_text
+from hippo_probe.paper import readout as R
 from hippo_probe.tasks import make_trials, task_config
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -45,12 +51,37 @@ def two_arena_trials(n_trials, world):
     return make_trials("specialized", n_trials, "test", 0, config=cfg)
 
 
+def arena_readout_accuracy(name, net, n_trials, folder):
+    """Test accuracy at 200 s of the study's readout (units h, fitted to convergence on
+    ``n_trials`` training trials; the L2 strength chosen on validation trials)."""
+    cfg = dataclasses.replace(R.READOUT, sizes=(n_trials,), taus=())
+    key = name.replace("/", "_").replace("@", "_seed")
+    for split, n in (("validation", cfg.n_validation), ("test", cfg.n_test),
+                     ("train", n_trials)):
+        keys = R.extract_features({key: net}, split, n, folder, world=net.world, cfg=cfg,
+                                  progress=False)
+    curve = R.learning_curve(folder, keys[key], ["h"], cfg, progress=False)["kinds"]["h"]
+    return curve["rows"][-1]["test_accuracy"][curve["times"].index(200.0)]
+
+
+def cell_class_fractions(rec):
+    """The fraction of units in each class of :func:`hippo_probe.classify_cells` (a unit
+    may be in several)."""
+    table = hp.classify_cells(rec, seed=0)
+    return {f"fraction_{name[3:]}": float(table[name].mean())
+            for name in table.data_vars if name.startswith("is_")}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--networks", nargs="+", default=["generalized"],
                     help="shipped names (name@seed) or network files / run folders")
     ap.add_argument("--trials", type=int, default=120)
     ap.add_argument("--pf-trials", type=int, default=200)
+    ap.add_argument("--readout-trials", type=int, default=4000,
+                    help="training trials of the arena readout, the same for every network")
+    ap.add_argument("--features", default=str(ROOT / "cache" / "readout"),
+                    help="the readout's feature cache (resumable)")
     ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "map_ingredients"))
     a = ap.parse_args()
     torch.set_num_threads(1)
@@ -77,14 +108,18 @@ def main():
                "place_fields": card.attrs["place_fields"],
                "global_remapping": card.attrs["global_remapping"],
                "median_information_bits_per_spike": float(info.information.median()),
+               **cell_class_fractions(rec),
                "twonn_dimension": float(dim.dimension.sel(estimator="TwoNN")),
+               "arena_readout_accuracy_200s": arena_readout_accuracy(
+                   name, net, a.readout_trials, a.features),
                "seconds": round(time.time() - t0)}
         rows.append(row)
         maps[name] = hp.ratemaps(rec, bin_size=0.03, by="environment")
         print(json.dumps(row), flush=True)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "scorecard.json", json.dumps(
-        {"trials": a.trials, "pf_trials": a.pf_trials, "rules": card.attrs["place_rule"]
+        {"trials": a.trials, "pf_trials": a.pf_trials, "readout_trials": a.readout_trials,
+         "rules": card.attrs["place_rule"]
          + "; " + card.attrs["remapping_rule"], "rows": rows}, indent=1), what="out")
     keys = list(rows[0])
     write_text(out / "scorecard.csv", "\n".join(

@@ -230,6 +230,26 @@ def _environment(**variables):
                 os.environ[k] = v
 
 
+def _worlds_first(cfgs):
+    """The runs with each world's first before any world's second, and so on: the first
+    run of a world makes the reference filters' estimates that its other runs reuse
+    (:func:`~hippo_probe.paper.config.shared_arrays`), so runs made at once are of
+    different worlds while those estimates are made, instead of one waiting for the
+    other.
+
+    >>> from types import SimpleNamespace as Run
+    >>> runs = [Run(world=w, network_seed=k) for w, k in
+    ...         [("darkness", 0), ("darkness", 1), ("darkness", 2), ("compass", 0)]]
+    >>> [(r.world, r.network_seed) for r in _worlds_first(runs)]
+    [('darkness', 0), ('compass', 0), ('darkness', 1), ('darkness', 2)]
+    """
+    rank, seen = {}, {}
+    for k, cfg in enumerate(cfgs):
+        rank[k] = seen.get(cfg.world, 0)
+        seen[cfg.world] = rank[k] + 1
+    return [cfgs[k] for k in sorted(range(len(cfgs)), key=lambda k: (rank[k], k))]
+
+
 def _make_runs_at_once(cfgs, names, out, report, jobs):
     """The runs in ``jobs`` processes (spawned: no state of this one is shared), the
     cores split evenly between them; a run that fails stops the others at once."""
@@ -245,7 +265,7 @@ def _make_runs_at_once(cfgs, names, out, report, jobs):
         try:
             timings = manager.Queue()
             futures = [pool.submit(_make_run_in_worker, cfg, names, out, timings)
-                       for cfg in cfgs]
+                       for cfg in _worlds_first(cfgs)]
             left = len(cfgs) * len(names)
             while left:
                 try:

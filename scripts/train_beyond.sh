@@ -6,10 +6,10 @@
 #
 #   nohup bash scripts/train_beyond.sh > logs/beyond.log 2>&1 &
 #
-# lane A  the L1 sweep of the `nonneg` variant (scripts/sweep_activity_l1.sh), then the
-#         variants at the chosen weight
-# lane B  the map-ingredient variants on the generalized task, one seed, 20,000 steps each,
-#         each a labelled departure from the study (hippo_probe.model.variants)
+# lane A  the L1 sweep of the `nonneg` variant (scripts/sweep_activity_l1.sh), then
+#         `nonneg` and `dale` at the weight the sweep keeps, 20,000 steps each
+# lane B  the place-cell variant on the generalized task, one seed, 20,000 steps, then the
+#         study's network trained the same way (the scorecard's reference at equal budget)
 #
 # Done: the shipped generalized network (seed 0) trained on with a fresh schedule, ended by
 # the 1% rule after 15,000 more steps (docs/guides/results.md, "The generalized network
@@ -31,11 +31,22 @@ train() {                       # NAME [options...]
 }
 
 lane_a() {
-  bash scripts/sweep_activity_l1.sh
+  bash scripts/sweep_activity_l1.sh || return 1
+  python analyses/activity_l1_sweep.py runs/sweep_nonneg_l1_* || return 1
+  local weight
+  weight=$(python -c 'import json; print(json.load(open("analyses/data/activity_l1_sweep/sweep.json"))["kept"])')
+  echo "$(date -u +%FT%TZ) activity L1 weight kept by the sweep: $weight"
+  for variant in nonneg dale; do
+    train "generalized_${variant}_s0" --task generalized --variant "$variant" \
+      --activity-l1 "$weight" --init-seed 0 --steps 20000 --snapshot-every 5000 || return 1
+  done
 }
 lane_b() {
   train generalized_placecells_s0 --task generalized --variant placecells --init-seed 0 \
-    --steps 20000 --snapshot-every 5000
+    --steps 20000 --snapshot-every 5000 || return 1
+  # the reference at the same budget: the study's network trained like the variants
+  train generalized_faithful_s0 --task generalized --init-seed 0 --steps 20000 \
+    --snapshot-every 5000
 }
 
 lane_a > logs/beyond_a.log 2>&1 &

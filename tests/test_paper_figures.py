@@ -304,3 +304,67 @@ def test_main_at_another_size_runs_without_refreshing(capsys):
     assert "not refreshed" in capsys.readouterr().out
     paper = argparse.Namespace(size="paper", refresh_tracked=".")
     assert _refresh_of_main(paper) == "."
+
+
+def test_shared_arrays_are_made_once_for_every_run_of_a_world(tmp_path):
+    """The reference filters' estimates, which do not depend on the networks, are made
+    by a world's first run and read by its others; another world, or other trials, make
+    their own."""
+    import numpy as np
+
+    from hippo_probe.paper.config import CONFIGS, for_run, shared_arrays, with_cache
+
+    base = with_cache(CONFIGS["tiny"], tmp_path)
+    made = []
+
+    def make(value):
+        def run():
+            made.append(value)
+            return {"estimate": np.full(3, value)}
+        return run
+
+    first = shared_arrays("pf", for_run(base, "darkness", 0), make(1.0), "trials-a")
+    second = shared_arrays("pf", for_run(base, "darkness", 1), make(2.0), "trials-a")
+    assert made == [1.0] and np.array_equal(second["estimate"], first["estimate"])
+    other_world = shared_arrays("pf", for_run(base, "compass", 0), make(3.0), "trials-a")
+    other_trials = shared_arrays("pf", for_run(base, "darkness", 1), make(4.0), "trials-b")
+    assert made == [1.0, 3.0, 4.0]
+    assert other_world["estimate"][0] == 3.0 and other_trials["estimate"][0] == 4.0
+
+
+def test_runs_made_at_once_wait_for_the_shared_arrays_instead_of_making_them_twice(
+        tmp_path):
+    import threading
+    import time
+
+    import numpy as np
+
+    from hippo_probe.paper.config import CONFIGS, for_run, shared_arrays, with_cache
+
+    base = with_cache(CONFIGS["tiny"], tmp_path)
+    made, results = [], {}
+
+    def run(seed):
+        def make():
+            made.append(seed)
+            time.sleep(0.3)             # long enough for the other run to ask meanwhile
+            return {"estimate": np.arange(4.0)}
+        results[seed] = shared_arrays("pf_slam", for_run(base, "darkness", seed), make)
+
+    threads = [threading.Thread(target=run, args=(seed,)) for seed in (0, 1)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(made) == 1
+    assert np.array_equal(results[0]["estimate"], results[1]["estimate"])
+
+
+def test_runs_at_once_start_with_each_worlds_first():
+    from hippo_probe._main import _worlds_first
+    from hippo_probe.paper.config import CONFIGS, for_run
+
+    runs = [for_run(CONFIGS["tiny"], world, seed) for world, seed in
+            [("darkness", 0), ("darkness", 1), ("darkness", 2), ("compass", 0)]]
+    assert [cfg.run for cfg in _worlds_first(runs)] == [
+        "darkness-seed0", "compass-seed0", "darkness-seed1", "darkness-seed2"]

@@ -4,9 +4,10 @@ Every figure reads recordings of the shipped networks (``hippo_probe/pretrained`
 the baselines' estimates added, made once and cached under the configuration's cache
 folder (:attr:`FigureConfig.cache`: ``<cache_root>/paper-<size>/<world>-seed<k>/``;
 ``hippo-probe figures`` puts it under its ``--out`` unless given ``--cache``). A cached
-recording is
-reused only if it was made from the same network file and the same configuration (both
-hashed into its attrs); otherwise it is rebuilt.
+recording is reused only if it was made from the same network file and the same
+configuration (both hashed into its attrs); otherwise it is rebuilt. The reference
+filters' estimates depend on the trials, not on the networks: they are made once per
+world and shared by its runs (:attr:`FigureConfig.world_cache`, :func:`shared_arrays`).
 
 Files of the repository that are not package data (the NWB test session, the
 hand-written notes of RESULTS.md) are found by :func:`repository_file`: the modules that
@@ -81,6 +82,12 @@ class FigureConfig:
             raise ValueError("the figures' cache folder is not set: give the configuration "
                              "one with `with_cache(config, folder)`")
         return Path(self.cache_root) / f"paper-{self.name}" / self.run
+
+    @property
+    def world_cache(self) -> Path:
+        """Folder of what every run of this world shares: the reference filters'
+        estimates, which depend on the world's trials and not on the networks."""
+        return self.cache.parent / f"{self.world}-shared"
 
     def numbers(self) -> dict:
         """The configuration as it is written into each figure's JSON."""
@@ -233,7 +240,9 @@ def recording(name: str, cfg: FigureConfig):
                          f"are of the {cfg.world!r} world")
     config = task_config(task, cfg.world, **overrides)
     batch = make_trials(task, n_trials, "test", cfg.seed, config=config)
-    extra = baseline_estimates(batch, which, cfg.particles) if which else None
+    extra = shared_arrays(f"baselines-{task}-{'-'.join(which)}", cfg,
+                          lambda: baseline_estimates(batch, which, cfg.particles),
+                          task, n_trials, sorted(overrides.items())) if which else None
     rec = hp.record(net, batch, baselines=extra, checkpoint=net_path.name, config=config,
                     session_id=f"paper-{name}-{cfg.run}")
     rec.attrs["paper_key"] = key
@@ -246,8 +255,32 @@ def recording(name: str, cfg: FigureConfig):
 
 def cached_arrays(name: str, cfg: FigureConfig, make, *key_parts) -> dict:
     """``make()`` -> dict of arrays, cached as ``<cache>/<name>.npz`` under a key."""
-    key = _digest(name, cfg, *key_parts, code_version())
-    path = cfg.cache / f"{name}.npz"
+    return _cached_npz(cfg.cache / f"{name}.npz",
+                       _digest(name, cfg, *key_parts, code_version()), make)
+
+
+def shared_arrays(name: str, cfg: FigureConfig, make, *key_parts) -> dict:
+    """``make()`` -> dict of arrays, made once for every run of ``cfg.world``
+    (``<world_cache>/<name>.npz``): for what depends on the world's trials and not on the
+    run's networks (the reference filters). Runs made at once take turns (a lock file):
+    the second waits for the first's arrays instead of making them again."""
+    from contextlib import nullcontext
+
+    shared = replace(cfg, network_seed=0)          # the key leaves the networks out
+    key = _digest(name, shared, *key_parts, code_version())
+    folder = cfg.world_cache
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        import fcntl
+    except ImportError:                            # no POSIX locks: each run makes its own
+        fcntl = None
+    with open(folder / f"{name}.lock", "a") if fcntl else nullcontext() as lock:
+        if fcntl:
+            fcntl.flock(lock, fcntl.LOCK_EX)       # released when the file closes
+        return _cached_npz(folder / f"{name}.npz", key, make)
+
+
+def _cached_npz(path: Path, key: str, make) -> dict:
     if path.exists():
         with np.load(path, allow_pickle=False) as f:
             if str(f["_key"]) == key:

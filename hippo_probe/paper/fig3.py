@@ -43,7 +43,7 @@ def _slam(cfg):
             guess = ds.class_probability_pfslam.argmax("environment_id")
             out[f"accuracy_{n}"] = (guess == ds.trial_environment).mean("trial_id").values
         return out
-    return C.cached_arrays("pf_slam", cfg, run, cfg.slam_trials, cfg.slam_particles)
+    return C.shared_arrays("pf_slam", cfg, run, cfg.slam_trials, cfg.slam_particles)
 
 
 def make(cfg, out):

@@ -232,17 +232,17 @@ def _environment(**variables):
                 os.environ[k] = v
 
 
-def _worlds_first(cfgs):
+def _interleave_worlds(cfgs):
     """The runs with each world's first before any world's second, and so on: the first
     run of a world makes the reference filters' estimates that its other runs reuse
-    (:func:`~hippo_probe.paper.config.shared_arrays`), so runs made at once are of
-    different worlds while those estimates are made, instead of one waiting for the
-    other.
+    (:func:`~hippo_probe.paper.config.shared_arrays`), so while they are made, the runs
+    made at once (as many as there are worlds, or fewer) are of different worlds rather
+    than one waiting for another.
 
     >>> from types import SimpleNamespace as Run
     >>> runs = [Run(world=w, network_seed=k) for w, k in
     ...         [("darkness", 0), ("darkness", 1), ("darkness", 2), ("compass", 0)]]
-    >>> [(r.world, r.network_seed) for r in _worlds_first(runs)]
+    >>> [(r.world, r.network_seed) for r in _interleave_worlds(runs)]
     [('darkness', 0), ('compass', 0), ('darkness', 1), ('darkness', 2)]
     """
     rank, seen = {}, {}
@@ -267,7 +267,7 @@ def _make_runs_at_once(cfgs, names, out, report, jobs):
         try:
             timings = manager.Queue()
             futures = [pool.submit(_make_run_in_worker, cfg, names, out, timings)
-                       for cfg in _worlds_first(cfgs)]
+                       for cfg in _interleave_worlds(cfgs)]
             left = len(cfgs) * len(names)
             while left:
                 try:

@@ -6,6 +6,7 @@ points over the package."""
 import json
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -339,6 +340,7 @@ def test_runs_made_at_once_wait_for_the_shared_arrays_instead_of_making_them_twi
 
     import numpy as np
 
+    pytest.importorskip("fcntl")           # without POSIX locks each run makes its own
     from hippo_probe.paper.config import CONFIGS, for_run, shared_arrays, with_cache
 
     base = with_cache(CONFIGS["tiny"], tmp_path)
@@ -360,11 +362,49 @@ def test_runs_made_at_once_wait_for_the_shared_arrays_instead_of_making_them_twi
     assert np.array_equal(results[0]["estimate"], results[1]["estimate"])
 
 
-def test_runs_at_once_start_with_each_worlds_first():
-    from hippo_probe._main import _worlds_first
+def test_runs_at_once_start_with_each_interleave_worlds():
+    from hippo_probe._main import _interleave_worlds
     from hippo_probe.paper.config import CONFIGS, for_run
 
     runs = [for_run(CONFIGS["tiny"], world, seed) for world, seed in
             [("darkness", 0), ("darkness", 1), ("darkness", 2), ("compass", 0)]]
-    assert [cfg.run for cfg in _worlds_first(runs)] == [
+    assert [cfg.run for cfg in _interleave_worlds(runs)] == [
         "darkness-seed0", "compass-seed0", "darkness-seed1", "darkness-seed2"]
+
+
+def test_a_worlds_runs_share_the_filters_of_the_same_trials_only(tmp_path, monkeypatch):
+    """The recordings' reference-filter estimates are made once for two networks' runs,
+    are those the filters give on the run's own trials, and are made again for other
+    trials or another particle count."""
+    import numpy as np
+
+    from hippo_probe.paper import config as C
+    from hippo_probe.tasks import make_trials, task_config
+
+    real, calls = C.baseline_estimates, []
+
+    def counted(batch, which, n_particles):
+        calls.append((batch.position.shape[1], n_particles))
+        return real(batch, which, n_particles)
+
+    monkeypatch.setattr(C, "baseline_estimates", counted)
+    base = C.with_cache(C.CONFIGS["tiny"], tmp_path)
+    for seed in (0, 1):
+        C.recording("localization", C.for_run(base, "darkness", seed))
+    assert calls == [(base.trials, base.particles)]
+    batch = make_trials("localization", base.trials, "test", base.seed,
+                        config=task_config("localization", "darkness"))
+    direct = real(batch, ("pi", "sh", "pf"), base.particles)
+    shared = C.shared_arrays("baselines-localization-pi-sh-pf", C.for_run(base, "darkness", 2),
+                             lambda: pytest.fail("made again"), C.batch_digest(batch),
+                             ("pi", "sh", "pf"), base.particles)
+    assert set(shared) == set(direct)
+    for name in direct:
+        assert np.array_equal(shared[name], direct[name]), name
+
+    C.recording("localization", C.for_run(replace(base, trials=base.trials + 1),
+                                          "darkness", 1))
+    C.recording("localization", C.for_run(replace(base, particles=base.particles + 10),
+                                          "darkness", 1))
+    assert calls[1:] == [(base.trials + 1, base.particles),
+                         (base.trials, base.particles + 10)]

@@ -16,10 +16,13 @@ need one take its path as an argument, defaulting to the repository's copy.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
+import os
+import socket
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 
 import matplotlib
@@ -174,8 +177,12 @@ def first_run(cfg: FigureConfig) -> FigureConfig:
     return for_run(cfg, *runs[0])
 
 
+@functools.cache
 def code_version() -> str:
-    """Hash of the package's sources: a cached recording made by other code is rebuilt."""
+    """Hash of the package's sources: a cached recording made by other code is rebuilt.
+
+    Read once per process, so that a process goes on naming its results by the code it
+    runs even if the sources are edited while it works."""
     h = hashlib.sha1()
     for path in sorted(PACKAGE.rglob("*.py")):
         h.update(path.read_bytes())
@@ -242,7 +249,7 @@ def recording(name: str, cfg: FigureConfig):
     batch = make_trials(task, n_trials, "test", cfg.seed, config=config)
     extra = shared_arrays(f"baselines-{task}-{'-'.join(which)}", cfg,
                           lambda: baseline_estimates(batch, which, cfg.particles),
-                          task, n_trials, sorted(overrides.items())) if which else None
+                          batch_digest(batch), which, cfg.particles) if which else None
     rec = hp.record(net, batch, baselines=extra, checkpoint=net_path.name, config=config,
                     session_id=f"paper-{name}-{cfg.run}")
     rec.attrs["paper_key"] = key
@@ -259,32 +266,61 @@ def cached_arrays(name: str, cfg: FigureConfig, make, *key_parts) -> dict:
                        _digest(name, cfg, *key_parts, code_version()), make)
 
 
+def batch_digest(batch) -> str:
+    """Digest of everything in a :class:`~hippo_probe.tasks.TrialBatch` (its arrays, its
+    task, split, seed and whole configuration): what a reference filter's estimates
+    depend on."""
+    h = hashlib.sha1()
+    for field_ in fields(batch):
+        value = getattr(batch, field_.name)
+        h.update(field_.name.encode())
+        if isinstance(value, np.ndarray):
+            h.update(repr((value.dtype.str, value.shape)).encode())
+            h.update(np.ascontiguousarray(value).tobytes())
+        else:
+            h.update(repr(value).encode())
+    return h.hexdigest()[:16]
+
+
 def shared_arrays(name: str, cfg: FigureConfig, make, *key_parts) -> dict:
     """``make()`` -> dict of arrays, made once for every run of ``cfg.world``
-    (``<world_cache>/<name>.npz``): for what depends on the world's trials and not on the
-    run's networks (the reference filters). Runs made at once take turns (a lock file):
-    the second waits for the first's arrays instead of making them again."""
-    from contextlib import nullcontext
-
-    shared = replace(cfg, network_seed=0)          # the key leaves the networks out
-    key = _digest(name, shared, *key_parts, code_version())
+    (``<world_cache>/<name>.npz``) under the key ``key_parts``: for what depends on the
+    world's trials and not on the run's networks (the reference filters; key them on
+    :func:`batch_digest`). Runs made at once take turns (a lock file, on systems with
+    POSIX locks): the second waits for the first's arrays instead of making them again,
+    and says in its log whom it waits for."""
+    key = _digest(name, *key_parts, code_version())
     folder = cfg.world_cache
     folder.mkdir(parents=True, exist_ok=True)
     try:
         import fcntl
-    except ImportError:                            # no POSIX locks: each run makes its own
-        fcntl = None
-    with open(folder / f"{name}.lock", "a") if fcntl else nullcontext() as lock:
-        if fcntl:
-            fcntl.flock(lock, fcntl.LOCK_EX)       # released when the file closes
+    except ImportError:                    # no POSIX locks: each run makes its own
+        return _cached_npz(folder / f"{name}.npz", key, make)
+    with open(folder / f"{name}.lock", "a+") as lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.seek(0)
+            holder = lock.read().strip() or "another process"
+            print(f"  waiting for {holder}, which is making the world's {name}", flush=True)
+            fcntl.flock(lock, fcntl.LOCK_EX)          # released when the file closes
+        lock.truncate(0)
+        lock.write(f"process {os.getpid()} on {socket.gethostname()}")
+        lock.flush()
         return _cached_npz(folder / f"{name}.npz", key, make)
 
 
 def _cached_npz(path: Path, key: str, make) -> dict:
-    if path.exists():
+    """The arrays of ``path`` if it holds ``key``'s, else ``make()``'s, written there
+    atomically (a file that cannot be read is made again)."""
+    import zipfile
+
+    try:
         with np.load(path, allow_pickle=False) as f:
             if str(f["_key"]) == key:
                 return {k: f[k] for k in f.files if k != "_key"}
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+        pass                               # absent, half-copied or of another format
     out = make()
     with atomic_path(path, overwrite=True) as tmp, open(tmp, "wb") as f:
         np.savez(f, _key=key, **out)

@@ -11,7 +11,6 @@ The builder of ``hippo-probe figures --only fig3`` and of the script
 """
 
 import matplotlib.pyplot as plt
-import numpy as np
 
 import hippo_probe as hp
 from hippo_probe.tasks import make_trials
@@ -43,7 +42,7 @@ def _slam(cfg):
             guess = ds.class_probability_pfslam.argmax("environment_id")
             out[f"accuracy_{n}"] = (guess == ds.trial_environment).mean("trial_id").values
         return out
-    return C.shared_arrays("pf_slam", cfg, run, cfg.slam_trials, cfg.slam_particles)
+    return C.shared_arrays("pf_slam", cfg, run, C.batch_digest(batch), cfg.slam_particles)
 
 
 def make(cfg, out):

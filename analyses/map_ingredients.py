@@ -6,7 +6,7 @@ started at the centre, so the generalized networks' start-relative estimate is i
 arena frame), and scored by :func:`hippo_probe.map_scorecard` (rules fixed in
 ``ScorecardConfig``), beside its localization error against the oracular particle filter
 on ``--pf-trials`` generalized test trials, the median Skaggs information of its units as
-spikes (``hp.poisson_spikes`` at 5 Hz), the fraction of its units in each class of
+spikes (``hp.poisson_spikes`` at 5 Hz) and the fraction of them in each class of
 :func:`hippo_probe.classify_cells`, their TwoNN dimension, and the accuracy at 200 s of
 the study's arena readout (Fig. 3F: a linear readout of the units fitted to convergence
 on ``--readout-trials`` specialized-task trials, :mod:`hippo_probe.paper.readout`, the
@@ -64,9 +64,10 @@ def arena_readout_accuracy(name, net, n_trials, folder):
     return curve["rows"][-1]["test_accuracy"][curve["times"].index(200.0)]
 
 
-def cell_class_fractions(rec):
+def cell_class_fractions(spikes):
     """The fraction of units in each class of :func:`hippo_probe.classify_cells` (a unit
-    may be in several)."""
+    may be in several), on the units as spikes: noise-free activity beats every shuffle,
+    so its classes would say nothing."""
     table = hp.classify_cells(rec, seed=0)
     return {f"fraction_{name[3:]}": float(table[name].mean())
             for name in table.data_vars if name.startswith("is_")}
@@ -108,7 +109,7 @@ def main():
                "place_fields": card.attrs["place_fields"],
                "global_remapping": card.attrs["global_remapping"],
                "median_information_bits_per_spike": float(info.information.median()),
-               **cell_class_fractions(rec),
+               **cell_class_fractions(spikes),
                "twonn_dimension": float(dim.dimension.sel(estimator="TwoNN")),
                "arena_readout_accuracy_200s": arena_readout_accuracy(
                    name, net, a.readout_trials, a.features),

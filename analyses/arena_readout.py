@@ -8,7 +8,7 @@ average of them, its time constant chosen on validation trials at ``--tau-size``
 and ``C = --tau-c``, then fitted like the study's readout.
 
     python analyses/arena_readout.py [--world darkness] [--seeds 0 1 2]
-        [--sizes 4000 16000 64000] [--features cache/readout]
+        [--sizes 4000 16000 64000] [--c-grid 0.01 0.1 1 10] [--features cache/readout]
         [--out analyses/data/arena_readout] [--export hippo_probe/pretrained]
 
 The arena probe of a training run along its steps (its snapshots, 2,000 training trials):
@@ -57,6 +57,10 @@ def main():
                     help="training trials at which the variant's time constant is chosen")
     ap.add_argument("--tau-c", type=float, default=1.0,
                     help="the L2 strength C at which the time constant is chosen")
+    ap.add_argument("--c-grid", type=float, nargs="+", default=list(R.READOUT.c_grid),
+                    help="inverse L2 strengths tried, in increasing order (default: the "
+                         "protocol's; a narrower grid for the largest sizes, whose fits "
+                         "take hours, e.g. the two best at the size below)")
     ap.add_argument("--kinds", nargs="+", default=["h", "leaky"],
                     choices=("h", "leaky"))
     ap.add_argument("--features", default=str(ROOT / "cache" / "readout"))
@@ -88,7 +92,8 @@ def main():
               f"{len(files)} networks")
         return
     torch.set_num_threads(1)
-    cfg = replace(R.READOUT, sizes=tuple(sorted(set(a.sizes))), taus=tuple(a.taus))
+    cfg = replace(R.READOUT, sizes=tuple(sorted(set(a.sizes))), taus=tuple(a.taus),
+                  c_grid=tuple(sorted(set(a.c_grid))))
     base = network_name("generalized", a.world)
     if a.networks:
         nets = {f"{Path(f).resolve().parents[1].name}_{Path(f).stem}": hp.load_pretrained(f)

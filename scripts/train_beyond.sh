@@ -2,9 +2,12 @@
 # The runs that go beyond the shipped networks, as two lanes (one per core: two 1-thread
 # runs train faster than one 2-thread run). Each run resumes from runs/NAME/checkpoint.pt;
 # a run already being trained is refused by the trainer's lock on its folder, so starting
-# this twice does no harm. Start it in the background and leave it:
+# this twice does no harm. Start it in the background and leave it (one lane: add a or b):
 #
 #   nohup bash scripts/train_beyond.sh > logs/beyond.log 2>&1 &
+#
+# Every variant run and its faithful reference trains exactly 20,000 steps (the stopping
+# rule off, as in the sweep): the scorecard compares them at equal budget.
 #
 # lane A  the L1 sweep of the `nonneg` variant (scripts/sweep_activity_l1.sh), then
 #         `nonneg` and `dale` at the weight the sweep keeps, 20,000 steps each
@@ -38,17 +41,19 @@ lane_a() {
   echo "$(date -u +%FT%TZ) activity L1 weight kept by the sweep: $weight"
   for variant in nonneg dale; do
     train "generalized_${variant}_s0" --task generalized --variant "$variant" \
-      --activity-l1 "$weight" --init-seed 0 --steps 20000 --snapshot-every 5000 || return 1
+      --activity-l1 "$weight" --init-seed 0 --steps 20000 --stop-improvement 0 \
+      --snapshot-every 5000 || return 1
   done
 }
 lane_b() {
   train generalized_placecells_s0 --task generalized --variant placecells --init-seed 0 \
-    --steps 20000 --snapshot-every 5000 || return 1
+    --steps 20000 --stop-improvement 0 --snapshot-every 5000 || return 1
   # the reference at the same budget: the study's network trained like the variants
   train generalized_faithful_s0 --task generalized --init-seed 0 --steps 20000 \
-    --snapshot-every 5000
+    --stop-improvement 0 --snapshot-every 5000
 }
 
-lane_a > logs/beyond_a.log 2>&1 &
-lane_b > logs/beyond_b.log 2>&1 &
+lanes=${1:-ab}
+[[ $lanes == *a* ]] && { lane_a >> logs/beyond_a.log 2>&1 & }
+[[ $lanes == *b* ]] && { lane_b >> logs/beyond_b.log 2>&1 & }
 wait

@@ -68,7 +68,7 @@ def cell_class_fractions(spikes):
     """The fraction of units in each class of :func:`hippo_probe.classify_cells` (a unit
     may be in several), on the units as spikes: noise-free activity beats every shuffle,
     so its classes would say nothing."""
-    table = hp.classify_cells(rec, seed=0)
+    table = hp.classify_cells(spikes, seed=0)
     return {f"fraction_{name[3:]}": float(table[name].mean())
             for name in table.data_vars if name.startswith("is_")}
 
@@ -80,7 +80,8 @@ def main():
     ap.add_argument("--trials", type=int, default=120)
     ap.add_argument("--pf-trials", type=int, default=200)
     ap.add_argument("--readout-trials", type=int, default=4000,
-                    help="training trials of the arena readout, the same for every network")
+                    help="training trials of the arena readout, the same for every network "
+                         "(0: no readout, for a quick look)")
     ap.add_argument("--features", default=str(ROOT / "cache" / "readout"),
                     help="the readout's feature cache (resumable)")
     ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "map_ingredients"))
@@ -112,7 +113,7 @@ def main():
                **cell_class_fractions(spikes),
                "twonn_dimension": float(dim.dimension.sel(estimator="TwoNN")),
                "arena_readout_accuracy_200s": arena_readout_accuracy(
-                   name, net, a.readout_trials, a.features),
+                   name, net, a.readout_trials, a.features) if a.readout_trials else None,
                "seconds": round(time.time() - t0)}
         rows.append(row)
         maps[name] = hp.ratemaps(rec, bin_size=0.03, by="environment")

@@ -295,6 +295,22 @@ def test_arena_probe(tmp_path):
     assert max(c["train"] for c in cells) > 0.5
 
 
+def test_map_ingredients_scores_each_network(tmp_path):
+    run = subprocess.run([sys.executable, "analyses/map_ingredients.py", "--networks",
+                          "generalized", "--trials", "8", "--pf-trials", "2",
+                          "--readout-trials", "0", "--out", str(tmp_path)],
+                         capture_output=True, text=True, cwd=ROOT, timeout=900)
+    assert run.returncode == 0, run.stderr[-3000:]
+    (row,) = json.loads((tmp_path / "scorecard.json").read_text())["rows"]
+    assert row["variant"] == "faithful" and not row["departure_from_study"]
+    fractions = [v for k, v in row.items() if k.startswith("fraction_")
+                 and k != "fraction_silent"]
+    assert {"fraction_place", "fraction_grid", "fraction_head_direction"} <= set(row)
+    assert all(0 <= v <= 1 for v in fractions)
+    assert row["error_over_pf_after_100s"] > 0 and row["arena_readout_accuracy_200s"] is None
+    assert (tmp_path / "map_ingredients.png").stat().st_size > 1000
+
+
 def test_main_at_another_size_runs_without_refreshing(capsys):
     import argparse
 

@@ -139,7 +139,8 @@ def main():
                 ax.set_xticks([])
                 ax.set_yticks([])
                 if u == 0:
-                    ax.set_ylabel(f"{name}\narena {e}", fontsize=6)
+                    label = Path(name).name if Path(name).exists() else name
+                    ax.set_ylabel(f"{label}\narena {e}", fontsize=6)
     fig.suptitle("rate maps of units 0-15 in two arenas (rows), per network", fontsize=8)
     save_figure(fig, out / "map_ingredients.png", dpi=110)
     plt.close(fig)

@@ -251,3 +251,39 @@ def save_figure(fig, path, **savefig_kwargs) -> Path:
     with atomic_path(path, overwrite=True, what="path") as tmp:
         fig.savefig(tmp, format=fmt, **savefig_kwargs)
     return path
+
+
+@contextmanager
+def exclusive_lock(path, on_busy):
+    """Hold an exclusive lock on the file ``path`` (made if absent) with this process's
+    pid written in it, for the ``with`` block.
+
+    When another process holds it, ``on_busy(holder)`` is called first (``holder``: the
+    pid that process wrote, or "?"): raise there to refuse, or return to wait for the
+    lock. The kernel drops a lock when its holder dies (kill -9 included), so no stale
+    lock survives a crash. The file is never removed: removing it on release would let a
+    late opener lock an unlinked file while the next holder locks a new one. Without
+    POSIX locks (``fcntl``), the block runs unlocked.
+    """
+    try:
+        import fcntl
+    except ImportError:
+        yield
+        return
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a+") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            handle.seek(0)
+            on_busy(handle.read().strip() or "?")
+            fcntl.flock(handle, fcntl.LOCK_EX)
+        handle.seek(0)
+        handle.truncate()
+        handle.write(str(os.getpid()))
+        handle.flush()
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)

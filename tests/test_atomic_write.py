@@ -106,8 +106,8 @@ ALLOWED = {
     ("tasks.py", "_discard"): "renames a damaged cache block aside to delete it",
     ("_main.py", "_make_run_in_worker"): "a run's message log, written as it goes so that "
                                          "it shows how far a failed run got; not data",
-    ("training/trainer.py", "_sole_trainer"): "a lock file (flock) holding the trainer's "
-                                              "pid, not data: never read back as results",
+    ("_atomic.py", "exclusive_lock"): "a lock file (flock) holding its holder's pid, not "
+                                      "data: never read back as results",
 }
 
 

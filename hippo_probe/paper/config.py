@@ -19,8 +19,6 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-import os
-import socket
 import time
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
@@ -32,7 +30,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import hippo_probe as hp
-from hippo_probe._atomic import atomic_path, save_figure, write_text
+from hippo_probe._atomic import atomic_path, exclusive_lock, save_figure, write_text
 from hippo_probe.tasks import make_trials, task_config
 
 from ._repository import PACKAGE, REPOSITORY, repository_file  # noqa: F401
@@ -292,21 +290,12 @@ def shared_arrays(name: str, cfg: FigureConfig, make, *key_parts) -> dict:
     key = _digest(name, *key_parts, code_version())
     folder = cfg.world_cache
     folder.mkdir(parents=True, exist_ok=True)
-    try:
-        import fcntl
-    except ImportError:                    # no POSIX locks: each run makes its own
-        return _cached_npz(folder / f"{name}.npz", key, make)
-    with open(folder / f"{name}.lock", "a+") as lock:
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            lock.seek(0)
-            holder = lock.read().strip() or "another process"
-            print(f"  waiting for {holder}, which is making the world's {name}", flush=True)
-            fcntl.flock(lock, fcntl.LOCK_EX)          # released when the file closes
-        lock.truncate(0)
-        lock.write(f"process {os.getpid()} on {socket.gethostname()}")
-        lock.flush()
+
+    def wait(holder):
+        print(f"  waiting for process {holder}, which is making the world's {name}",
+              flush=True)
+
+    with exclusive_lock(folder / f"{name}.lock", wait):
         return _cached_npz(folder / f"{name}.npz", key, make)
 
 

@@ -26,7 +26,7 @@ import torch
 import torch.nn.functional as F
 from tqdm.auto import tqdm
 
-from .._atomic import write_text
+from .._atomic import exclusive_lock, write_text
 from .._validators import check_bool
 from .._version import __version__
 from ..errors import RunInUseError
@@ -367,37 +367,16 @@ def _fit_pinned(config, run_dir, progress, cache_dir, stop_after):
         torch.set_num_threads(threads_before)   # don't leave a Jupyter kernel pinned
 
 
-@contextlib.contextmanager
 def _sole_trainer(run_dir: Path):
-    """Hold an exclusive lock on ``run_dir`` while training in it: a second process
-    started on the same run (the same command twice) would checkpoint over the first one's
-    progress, so it is refused. The kernel drops the lock when its holder dies (kill -9
-    included), so no stale lock survives a crash. The file ``.lock`` stays in the folder:
-    removing it on release would let a late opener lock an unlinked file while a new
-    trainer locks a new one."""
-    try:
-        import fcntl
-    except ImportError:         # not POSIX: no lock, as before
-        yield
-        return
-    run_dir.mkdir(parents=True, exist_ok=True)
-    with open(run_dir / ".lock", "a+") as handle:
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            handle.seek(0)
-            holder = handle.read().strip() or "?"
-            raise RunInUseError(f"the run folder {str(run_dir)!r} is being trained by "
-                                f"another process (pid {holder}); wait for it, or stop it "
-                                f"and resume with the same command") from None
-        handle.seek(0)
-        handle.truncate()
-        handle.write(str(os.getpid()))
-        handle.flush()
-        try:
-            yield
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
+    """Hold an exclusive lock on ``run_dir`` (its file ``.lock``) while training in it: a
+    second process started on the same run (the same command twice) would checkpoint over
+    the first one's progress, so it is refused."""
+    def refuse(holder):
+        raise RunInUseError(f"the run folder {str(run_dir)!r} is being trained by another "
+                            f"process (pid {holder}); wait for it, or stop it and resume "
+                            f"with the same command") from None
+
+    return exclusive_lock(run_dir / ".lock", refuse)
 
 
 def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):

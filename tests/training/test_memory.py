@@ -4,6 +4,7 @@ import subprocess
 import sys
 import textwrap
 
+import numpy as np
 import pytest
 
 # Run in a fresh interpreter: inside the test session the heap already holds whatever
@@ -50,9 +51,10 @@ def test_a_training_step_reuses_the_last_steps_activations():
     # Within a few steps the heap has grown to the step's size; from then on a step with
     # the setting faults in 0 pages, now and then 16,000 (one buffer) while the heap
     # settles. Measured with the fused training kernels, 12 steps: 62,000, 16,000, then
-    # 0-1 but once 16,000 (at step 3, 4 or 5), against 16,000-52,000 every step by
-    # default. The steady state compared is the last six steps.
-    steady_default = sum(default["faults"][-6:]) / 6
-    steady_reuse = sum(reuse["faults"][-6:]) / 6
+    # 0-1 but once 16,000 (at step 3, 4 or 5; on a loaded machine as late as step 8),
+    # against 16,000-52,000 every step by default. The steady state compared is the
+    # typical one of the last six steps (their median: that one settling step is not it).
+    steady_default = float(np.median(default["faults"][-6:]))
+    steady_reuse = float(np.median(reuse["faults"][-6:]))
     assert steady_default > 10_000, default        # the cost the setting removes is real
     assert steady_reuse < steady_default / 10, (default, reuse)

@@ -16,13 +16,15 @@ The arena probe of a training run along its steps (its snapshots, 2,000 training
     python analyses/arena_readout.py --networks runs/RUN/snapshots/step_*.pt
         --sizes 2000 --tau-size 2000 --out analyses/data/arena_probe_steps
 
-Writes ``<out>/<network>_seed<k>.json`` (learning curves, L2 paths, test curves) and,
+Writes ``<out>/<network>_seed<k>.json`` (learning curves, L2 paths, test curves; a later
+run of other sizes or kinds on the same features is added to it) and,
 with ``--export``, the study's readout at the largest size as
 ``<export>/generalized_readout[_seed<k>].pt`` (the compass world's as
 ``generalized_compass_readout.pt``).
 """
 
 import argparse
+import json
 import time
 from dataclasses import asdict, replace
 from pathlib import Path
@@ -77,17 +79,15 @@ def main():
         ap.error("--export ships the shipped networks' readouts; it cannot be combined "
                  "with --networks")
     if a.plot_only:
-        import json
-
-        from hippo_probe._atomic import save_figure
-
-        from hippo_probe._atomic import write_text
+        from hippo_probe._atomic import save_figure, write_text
 
         files = sorted(Path(a.out).glob("*.json"))
         results = [json.loads(f.read_text()) for f in files]
         fig = R.plot_readout(results)
         save_figure(fig, Path(a.out) / "arena_readout.png", dpi=130)
-        write_text(Path(a.out) / "arena_readout.md", R.readout_table(results), what="out")
+        write_text(Path(a.out) / "arena_readout.md",
+                   R.readout_table(results) + "\nAcross networks:\n\n"
+                   + R.seed_summary(results), what="out")
         print(f"saved {Path(a.out) / 'arena_readout.png'} and arena_readout.md from "
               f"{len(files)} networks")
         return
@@ -132,7 +132,12 @@ def main():
         res.update(network=name, features=key, world=a.world,
                    config=dict(asdict(cfg), taus=[str(t) for t in cfg.taus]),
                    fit_seconds=round(time.time() - t1))
-        R.write_json(Path(a.out) / f"{name}.json", res)
+        out_file = Path(a.out) / f"{name}.json"
+        if out_file.exists():
+            # another size or kind of the same features extends the learning curve
+            res = R.merge_results(json.loads(out_file.read_text()), res)
+            print(f"added to {out_file}", flush=True)
+        R.write_json(out_file, res)
         if a.export and "h" in decoders:
             seed = int(name.rsplit("seed", 1)[1]) if "_seed" in name else 0
             target = shipped_name(f"{base}_readout", seed)

@@ -359,6 +359,65 @@ def write_json(path, obj) -> None:
     write_text(Path(path), json.dumps(obj, indent=1), what="out")
 
 
+def merge_results(old: dict, new: dict) -> dict:
+    """``new`` fitted readouts added to ``old`` ones of the same network's features.
+
+    A later run at another training-set size or of another feature kind extends the
+    learning curve instead of replacing it: per kind, the rows of ``new`` replace those
+    of ``old`` at the same size, the others are kept, sorted by size. Each row's L2 path
+    records the strengths it tried, so rows fitted with different ``c_grid`` stay
+    self-describing; ``config`` is the latest run's and ``runs`` lists every run's.
+    Results of other features (another network, world or protocol) are refused.
+    """
+    if old.get("features") != new.get("features"):
+        raise ValueError(f"cannot merge readouts of features {new.get('features')!r} into "
+                         f"those of {old.get('features')!r}: another network or protocol")
+    merged = {**old, **{k: v for k, v in new.items() if k != "kinds"}}
+    kinds = {k: dict(v) for k, v in old["kinds"].items()}
+    for kind, v in new["kinds"].items():
+        rows = {r["train_trials"]: r for r in kinds.get(kind, {}).get("rows", [])}
+        rows.update({r["train_trials"]: r for r in v["rows"]})
+        kinds[kind] = {**v, "rows": [rows[n] for n in sorted(rows)]}
+    merged["kinds"] = kinds
+    merged["sizes"] = sorted({r["train_trials"] for v in kinds.values() for r in v["rows"]})
+    merged["runs"] = [*old.get("runs", [{"config": old.get("config"),
+                                        "fit_seconds": old.get("fit_seconds")}]),
+                      {"config": new.get("config"), "fit_seconds": new.get("fit_seconds")}]
+    merged["fit_seconds"] = sum(r["fit_seconds"] or 0 for r in merged["runs"])
+    return merged
+
+
+def seed_summary(results: list) -> str:
+    """A Markdown table across networks (seeds): per feature kind and training-set size,
+    the test accuracy at 100 s and 200 s as mean (min-max) and the number of networks.
+
+    The variant's rows pool each network's chosen time constant (named per network in
+    :func:`readout_table`)."""
+    groups: dict = {}
+    for res in results:
+        chosen = (res.get("leaky_tau_choice") or {}).get("chosen")
+        for kind, v in res["kinds"].items():
+            if kind != "h" and kind != chosen:
+                continue
+            label = describe_kind("h") if kind == "h" else \
+                "leaky average of h, tau chosen per network (variant)"
+            times = v["times"]
+            for row in v["rows"]:
+                acc = row["test_accuracy"]
+                groups.setdefault((kind == "h", label, row["train_trials"]), []).append(
+                    (acc[times.index(100.0)], acc[times.index(200.0)]))
+
+    def spread(values):
+        return f"{np.mean(values):.3f} ({min(values):.3f}–{max(values):.3f})"
+
+    lines = ["| features | training trials | networks | accuracy at 100 s | "
+             "accuracy at 200 s |", "| --- | --- | --- | --- | --- |"]
+    for (_, label, n), accs in sorted(groups.items(), key=lambda g: (not g[0][0], g[0][2])):
+        a100, a200 = zip(*accs)
+        lines.append(f"| {label} | {n:,} | {len(accs)} | {spread(a100)} | {spread(a200)} |")
+    return "\n".join(lines) + "\n"
+
+
 def readout_table(results: list) -> str:
     """A Markdown table of fitted readouts: per network, feature kind and training-set
     size, the chosen C and the test accuracy at 100 s and 200 s (the variant's time

@@ -244,3 +244,35 @@ def test_a_shipped_readout_finds_its_network_past_a_namesake_and_nowhere_else(tm
     with pytest.raises(CheckpointError, match="found neither beside it nor among the "
                                               "shipped networks"):
         hp.load_pretrained(tmp_path / "mine.pt")
+
+
+def _result(features, kind, sizes, acc):
+    times = [float(t) for t in range(10, 201, 10)]
+    rows = [{"train_trials": n, "c": 1.0, "path": [{"c": 1.0}], "test_accuracy": [a] * 20}
+            for n, a in zip(sizes, acc)]
+    return {"features": features, "network": features.split("-")[0], "sizes": sizes,
+            "kinds": {kind: {"rows": rows, "times": times}}, "config": {"sizes": sizes},
+            "fit_seconds": 10}
+
+
+def test_a_later_size_or_kind_extends_the_learning_curve_and_replaces_its_own_size():
+    old = _result("net-abc", "h", [4000, 16000], [0.2, 0.25])
+    new = _result("net-abc", "h", [16000, 64000], [0.26, 0.3])
+    new["kinds"].update(_result("net-abc", "leaky_200", [4000], [0.5])["kinds"])
+    merged = R.merge_results(old, new)
+    rows = merged["kinds"]["h"]["rows"]
+    assert [r["train_trials"] for r in rows] == [4000, 16000, 64000]
+    assert [r["test_accuracy"][-1] for r in rows] == [0.2, 0.26, 0.3]
+    assert [r["train_trials"] for r in merged["kinds"]["leaky_200"]["rows"]] == [4000]
+    assert merged["sizes"] == [4000, 16000, 64000]
+    assert len(merged["runs"]) == 2 and merged["fit_seconds"] == 20
+    assert [r["train_trials"] for r in old["kinds"]["h"]["rows"]] == [4000, 16000]
+    with pytest.raises(ValueError, match="another network or protocol"):
+        R.merge_results(old, _result("net-def", "h", [64000], [0.3]))
+
+
+def test_the_seed_summary_gives_mean_and_range_per_size():
+    results = [_result(f"generalized_seed{k}-x", "h", [4000], [a])
+               for k, a in enumerate((0.1, 0.2, 0.6))]
+    table = R.seed_summary(results)
+    assert "| units h (the study's readout) | 4,000 | 3 | 0.300 (0.100–0.600) |" in table

@@ -388,8 +388,9 @@ def merge_results(old: dict, new: dict) -> dict:
 
 
 def seed_summary(results: list) -> str:
-    """A Markdown table across networks (seeds): per feature kind and training-set size,
-    the test accuracy at 100 s and 200 s as mean (min-max) and the number of networks.
+    """A Markdown table across networks (seeds): per world, feature kind and training-set
+    size, the test accuracy at 100 s and 200 s as mean (min-max) and the number of
+    networks.
 
     The variant's rows pool each network's chosen time constant (named per network in
     :func:`readout_table`)."""
@@ -404,17 +405,20 @@ def seed_summary(results: list) -> str:
             times = v["times"]
             for row in v["rows"]:
                 acc = row["test_accuracy"]
-                groups.setdefault((kind == "h", label, row["train_trials"]), []).append(
+                groups.setdefault((res.get("world", ""), kind == "h", label,
+                                   row["train_trials"]), []).append(
                     (acc[times.index(100.0)], acc[times.index(200.0)]))
 
     def spread(values):
         return f"{np.mean(values):.3f} ({min(values):.3f}–{max(values):.3f})"
 
-    lines = ["| features | training trials | networks | accuracy at 100 s | "
-             "accuracy at 200 s |", "| --- | --- | --- | --- | --- |"]
-    for (_, label, n), accs in sorted(groups.items(), key=lambda g: (not g[0][0], g[0][2])):
-        a100, a200 = zip(*accs)
-        lines.append(f"| {label} | {n:,} | {len(accs)} | {spread(a100)} | {spread(a200)} |")
+    lines = ["| world | features | training trials | networks | accuracy at 100 s | "
+             "accuracy at 200 s |", "| --- | --- | --- | --- | --- | --- |"]
+    order = sorted(groups, key=lambda g: (g[0], not g[1], g[3]))
+    for world, _, label, n in order:
+        a100, a200 = zip(*groups[world, _, label, n])
+        lines.append(f"| {world} | {label} | {n:,} | {len(a100)} | {spread(a100)} | "
+                     f"{spread(a200)} |")
     return "\n".join(lines) + "\n"
 
 

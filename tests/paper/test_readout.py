@@ -272,7 +272,12 @@ def test_a_later_size_or_kind_extends_the_learning_curve_and_replaces_its_own_si
 
 
 def test_the_seed_summary_gives_mean_and_range_per_size():
-    results = [_result(f"generalized_seed{k}-x", "h", [4000], [a])
+    results = [dict(_result(f"generalized_seed{k}-x", "h", [4000], [a]), world="darkness")
                for k, a in enumerate((0.1, 0.2, 0.6))]
+    results.append(dict(_result("generalized_compass-x", "h", [4000], [0.05]),
+                        world="compass"))
     table = R.seed_summary(results)
-    assert "| units h (the study's readout) | 4,000 | 3 | 0.300 (0.100–0.600) |" in table
+    assert ("| darkness | units h (the study's readout) | 4,000 | 3 | 0.300 (0.100–0.600) |"
+            in table)
+    assert "| compass | units h (the study's readout) | 4,000 | 1 | 0.050 (0.050–0.050) |" \
+        in table

@@ -25,6 +25,7 @@ with ``--export``, the study's readout at the largest size as
 
 import argparse
 import json
+import sys
 import time
 from dataclasses import asdict, replace
 from pathlib import Path
@@ -32,15 +33,32 @@ from pathlib import Path
 import torch
 
 import hippo_probe as hp
+from hippo_probe.model.checkpoint import save_atomic
 from hippo_probe.paper import readout as R
 from hippo_probe.paper.config import network_name
-from hippo_probe.model.checkpoint import save_atomic
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def shipped_name(base: str, seed: int) -> str:
     return base if seed == 0 else f"{base}_seed{seed}"
+
+
+def ship_log(file: Path, res: dict, row: dict, folder, target: str) -> None:
+    """Write ``<target>.log.json`` beside the exported readout ``file``: the fit's record
+    and its test metrics measured anew (:func:`~hippo_probe.paper.readout.readout_log`),
+    keeping the log of the readout it replaces in ``folder`` (or the shipped one)."""
+    from hippo_probe._atomic import write_text
+    from hippo_probe.pretrained import HERE
+
+    old = next((p for p in (Path(folder) / f"{target}.log.json", HERE / f"{target}.log.json")
+                if p.exists()), None)
+    previous = json.loads(old.read_text()) if old else None
+    h = res["kinds"]["h"]
+    log = R.readout_log(file, row, h["times"], fit_seconds=res.get("fit_seconds"),
+                        command="python analyses/arena_readout.py " + " ".join(sys.argv[1:]),
+                        previous=previous)
+    write_text(Path(folder) / f"{target}.log.json", json.dumps(log, indent=1), what="export")
 
 
 def main():
@@ -140,16 +158,20 @@ def main():
         R.write_json(out_file, res)
         if a.export and "h" in decoders:
             seed = int(name.rsplit("seed", 1)[1]) if "_seed" in name else 0
+            # the decoder is this run's largest size (the merged results may hold others)
+            row = next(r for r in res["kinds"]["h"]["rows"]
+                       if r["train_trials"] == max(cfg.sizes))
             target = shipped_name(f"{base}_readout", seed)
             desc = {"task": "specialized", "world": a.world, "train_only": "classifier",
                     "init_from": name, "readout": "convex", "features": "h",
                     "fit_times_s": list(cfg.fit_times),
-                    "train_trials": max(cfg.sizes),
-                    "c": res["kinds"]["h"]["rows"][-1]["c"],
+                    "train_trials": row["train_trials"],
+                    "c": row["c"],
                     "precision": "fp32"}
+            file = Path(a.export) / f"{target}.pt"
             save_atomic(R.readout_network(net.info["file"], decoders["h"],
-                                          description=desc),
-                        Path(a.export) / f"{target}.pt")
+                                          description=desc), file)
+            ship_log(file, res, row, a.export, target)
             print(f"exported {target}", flush=True)
 
 

@@ -371,7 +371,10 @@ def network_info(cfg: FigureConfig) -> dict:
             "finished": log.get("finished"), "stopped": log.get("stopped"),
             "wall_time_s": log.get("wall_time_s"),
             "base_network_steps": (log.get("base_network") or {}).get("steps_done"),
-            "base_network": (log.get("base_network") or {}).get("init_from")}
+            "base_network": (log.get("base_network") or {}).get("init_from"),
+            # a readout fitted as a convex problem has no steps, a training-set size
+            "fit_trials": (log.get("fit") or {}).get("train_trials"),
+            "fit_c": (log.get("fit") or {}).get("c")}
     return info
 
 

@@ -355,6 +355,44 @@ def readout_network(base_file, decoder, *, description: dict) -> dict:
     return as_readout(network, base, base_file)
 
 
+def readout_log(readout_file, row: dict, times, *, fit_seconds=None, command=None,
+                previous: dict | None = None, n_test: int = 1000) -> dict:
+    """The log shipped beside a convex readout (``<name>.log.json``), in the shape of a
+    training log so that :mod:`hippo_probe.pretrained.summary` and the figures read it.
+
+    ``test`` is measured anew: the readout file (``readout_file``, from
+    :func:`readout_network`) runs on the specialized task's first ``n_test`` test trials
+    through the trainer's own evaluation, so its accuracy is that of the shipped weights
+    (it must equal the fit's ``row["test_accuracy"]`` on the same trials up to float32
+    rounding) and its errors are the frozen network's. ``fit`` keeps the fit's record
+    (training trials, C, the L2 path, the Fig. 3F curve at ``times``); ``config["steps"]``
+    is None (no gradient steps). ``previous``, the log of the readout it replaces, is kept
+    under ``replaces`` (a gradient-trained readout's steps and test metrics; what a
+    convex one itself replaced).
+    """
+    from ..model.load import load_pretrained
+    from ..tasks import make_trials
+    from ..training.trainer import evaluate_network, summarize
+
+    net = load_pretrained(readout_file)
+    batch = make_trials("specialized", n_test, "test", 0, world=net.world)
+    test = summarize(evaluate_network(net, batch), batch.dt)
+    log = {"config": {**net.info["config"], "steps": None}, "world": net.world,
+           "fit": {"train_trials": row["train_trials"], "c": row["c"], "path": row["path"],
+                   "validation_accuracy_late": row["validation_accuracy_late"],
+                   "times": [float(t) for t in times],
+                   "test_accuracy": row["test_accuracy"]},
+           "test": test, "steps_done": None, "finished": True, "wall_time_s": fit_seconds,
+           "command": command, "base_network": net.info.get("base_network")}
+    if previous is not None and "fit" in previous:   # a convex readout: keep its record
+        log["replaces"] = previous.get("replaces")
+    elif previous is not None:
+        log["replaces"] = {"readout": "gradient-trained",
+                           "steps_done": previous.get("steps_done"),
+                           "stopped": previous.get("stopped"), "test": previous.get("test")}
+    return log
+
+
 def write_json(path, obj) -> None:
     write_text(Path(path), json.dumps(obj, indent=1), what="out")
 

@@ -420,6 +420,16 @@ def _spread(values: list, spec: str = ".2f") -> str:
     return mean if lo == hi else f"{mean} ({lo}–{hi})"
 
 
+def _trained(name: str, info: dict) -> str:
+    """How a network of the run was made, for the header of RESULTS.md."""
+    if info.get("fit_trials"):
+        return (f"{name} fitted to convergence on {info['fit_trials']:,} training trials "
+                f"(C = {info['fit_c']:g})")
+    return (f"{name} {info['steps_done']} of {info['steps_budget']} steps"
+            + ("" if info.get("finished") else " (training not finished)")
+            + _stopped(info.get("stopped")))
+
+
 def _stopped(stopped) -> str:
     """How a run that ended before its budget ended, in words (``log["stopped"]``)."""
     if not stopped:
@@ -518,9 +528,7 @@ def write_results(figures_dir, out_path, notes_path=_REPOSITORY_NOTES, *, runs=N
         for seed, figs in runs[w].items():
             nets = next((f.get("networks") for f in figs.values() if f.get("networks")), {})
             lines.append(f"- {w} world, seed {seed}: " + ("; ".join(
-                f"{k} {v['steps_done']} of {v['steps_budget']} steps"
-                + ("" if v.get("finished") else " (training not finished)")
-                + _stopped(v.get("stopped")) for k, v in nets.items()) or "networks n/a"))
+                _trained(k, v) for k, v in nets.items()) or "networks n/a"))
     head = ["claim (Kanitscheider & Fiete 2017)", "paper"]
     for w in worlds:
         head += [f"{w} world: mean (min–max) over seeds", f"verdict, {w}"]

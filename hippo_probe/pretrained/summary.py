@@ -37,7 +37,8 @@ def shipped_table(names=NAMES, *, folder=None):
     pandas.DataFrame
         Index (``network``, ``seed``); columns ``world``, ``steps``, ``budget``,
         ``stopped_early`` (the 1% rule ended it before its budget), ``hours`` (wall time of
-        training) and :data:`METRICS` (NaN where the task has no arena class).
+        training) and :data:`METRICS` (NaN where the task has no arena class). A readout
+        fitted as a convex problem (its log has ``fit``) has 0 steps and no budget.
 
     Examples
     --------
@@ -58,6 +59,7 @@ def shipped_table(names=NAMES, *, folder=None):
             except (OSError, ValueError) as err:
                 raise ValueError(f"the training log of {name!r} seed {seed} ({path}) cannot "
                                  f"be read: {err}") from None
+            # a readout fitted as a convex problem (log["fit"]) took no gradient steps
             steps = (log.get("stopped") or {}).get("step") or max(
                 (v["step"] for v in log.get("validation", [])), default=0)
             test = log.get("test") or {}

@@ -281,3 +281,52 @@ def test_the_seed_summary_gives_mean_and_range_per_size():
             in table)
     assert "| compass | units h (the study's readout) | 4,000 | 1 | 0.050 (0.050–0.050) |" \
         in table
+
+
+def test_the_shipped_log_measures_the_exported_weights_and_keeps_the_old_readouts(tiny,
+                                                                                tmp_path):
+    from hippo_probe.model.checkpoint import save_atomic
+    from hippo_probe.training import TrainConfig
+    from hippo_probe.training.trainer import save_network
+
+    net, cfg, folder, key = tiny
+    base = tmp_path / "base.pt"
+    save_network(net, TrainConfig(task="generalized", hidden_size=8), {}, base)
+    res = R.learning_curve(folder, key, ["h"], cfg, progress=False)
+    save_atomic(R.readout_network(base, res["decoders"]["h"],
+                                  description={"readout": "convex", "world": "darkness"}),
+                tmp_path / "readout.pt")
+    h = res["kinds"]["h"]
+    row = h["rows"][-1]
+    gradient = {"config": {"steps": 4000}, "steps_done": 2000, "stopped": {"step": 2000},
+                "test": {"accuracy_200s": 0.13}}
+    log = R.readout_log(tmp_path / "readout.pt", row, h["times"], n_test=cfg.n_test,
+                        previous=gradient)
+    # the trainer's evaluation of the shipped weights gives the fit's own test accuracy
+    for t in (100, 200):
+        assert log["test"][f"accuracy_{t}s"] == row["test_accuracy"][h["times"].index(t)]
+    assert log["config"]["steps"] is None and log["fit"]["train_trials"] == row["train_trials"]
+    assert log["replaces"] == {"readout": "gradient-trained", "steps_done": 2000,
+                               "stopped": {"step": 2000}, "test": {"accuracy_200s": 0.13}}
+    again = R.readout_log(tmp_path / "readout.pt", row, h["times"], n_test=cfg.n_test,
+                          previous=log)
+    assert again["replaces"] == log["replaces"]
+
+
+def test_a_convex_readout_is_described_by_its_fit_not_by_steps(tmp_path):
+    import json
+
+    from hippo_probe.paper.results import _trained
+    from hippo_probe.pretrained.summary import shipped_table
+
+    assert _trained("generalized_readout", {"fit_trials": 64000, "fit_c": 10.0}) == \
+        "generalized_readout fitted to convergence on 64,000 training trials (C = 10)"
+    assert _trained("generalized", {"steps_done": 40000, "steps_budget": 40000,
+                                    "finished": True}) == "generalized 40000 of 40000 steps"
+    (tmp_path / "generalized_readout.pt").write_bytes(b"")
+    log = {"config": {"steps": None, "world": "darkness"}, "fit": {"train_trials": 64000},
+           "test": {"accuracy_200s": 0.25}, "wall_time_s": 3600.0}
+    (tmp_path / "generalized_readout.log.json").write_text(json.dumps(log))
+    row = shipped_table(["generalized_readout"], folder=tmp_path).iloc[0]
+    assert row["steps"] == 0 and row["budget"] is None and row["accuracy_200s"] == 0.25
+    assert row["hours"] == 1.0 and not row["stopped_early"]

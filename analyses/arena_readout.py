@@ -44,7 +44,8 @@ def shipped_name(base: str, seed: int) -> str:
     return base if seed == 0 else f"{base}_seed{seed}"
 
 
-def ship_log(file: Path, res: dict, row: dict, folder, target: str) -> None:
+def ship_log(file: Path, res: dict, row: dict, folder, target: str,
+             command: str | None = None) -> None:
     """Write ``<target>.log.json`` beside the exported readout ``file``: the fit's record
     and its test metrics measured anew (:func:`~hippo_probe.paper.readout.readout_log`),
     keeping the log of the readout it replaces in ``folder`` (or the shipped one)."""
@@ -56,7 +57,8 @@ def ship_log(file: Path, res: dict, row: dict, folder, target: str) -> None:
     previous = json.loads(old.read_text()) if old else None
     h = res["kinds"]["h"]
     log = R.readout_log(file, row, h["times"], fit_seconds=res.get("fit_seconds"),
-                        command="python analyses/arena_readout.py " + " ".join(sys.argv[1:]),
+                        command=command or ("python analyses/arena_readout.py "
+                                            + " ".join(sys.argv[1:])),
                         previous=previous)
     write_text(Path(folder) / f"{target}.log.json", json.dumps(log, indent=1), what="export")
 

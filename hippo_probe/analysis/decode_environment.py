@@ -44,8 +44,11 @@ def fit_linear_decoder(x, y, *, c, max_iter=None, tol=1e-4, warm_from=None):
     Returns
     -------
     sklearn.pipeline.Pipeline
-        ``StandardScaler`` then ``LogisticRegression``; ``n_iter`` and ``converged``
-        are set on it.
+        ``StandardScaler`` then ``LogisticRegression``; ``n_iter``, ``converged`` and
+        ``solver_message`` are set on it. ``converged`` is False when the iterations ran
+        out *or* scikit-learn reported the solver as not converged (e.g. L-BFGS's line
+        search failing, which stops it early: a fit that stopped after a few iterations is
+        not thereby converged); ``solver_message`` is that report ("" if none).
     """
     from sklearn.linear_model import LogisticRegression
     from sklearn.pipeline import make_pipeline
@@ -63,13 +66,18 @@ def fit_linear_decoder(x, y, *, c, max_iter=None, tol=1e-4, warm_from=None):
     import warnings
 
     from sklearn.exceptions import ConvergenceWarning
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(record=True) as caught:
         # converged or not is returned (``converged``) rather than warned once per fit
-        warnings.simplefilter("ignore", ConvergenceWarning)
+        warnings.simplefilter("always", ConvergenceWarning)
         model.fit(z, y)
+    failed = [str(w.message) for w in caught if issubclass(w.category, ConvergenceWarning)]
+    for w in caught:                       # other warnings reach the caller as usual
+        if not issubclass(w.category, ConvergenceWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     pipeline = make_pipeline(scaler, model)
     pipeline.n_iter = int(np.max(model.n_iter_))
-    pipeline.converged = pipeline.n_iter < max_iter
+    pipeline.converged = pipeline.n_iter < max_iter and not failed
+    pipeline.solver_message = " ".join(" ".join(m.split()) for m in failed)[:300]
     return pipeline
 
 

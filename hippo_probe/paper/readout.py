@@ -255,8 +255,10 @@ def fit_path(x_train, y_train, x_val, y_val, val_times, cfg: ReadoutConfig = REA
 
     Each entry records C, the validation accuracy (the mean over the validation times
     within the fit times' range, late in the trial), the solver's iterations and whether
-    it converged. The path runs in increasing C, each fit warm-started from the last (the
-    same optimum, fewer iterations), and stops once validation accuracy falls.
+    it converged (with scikit-learn's report if not). The path runs in increasing C, each
+    fit warm-started from the last converged one (the same optimum, fewer iterations), and
+    stops once validation accuracy falls. A fit that did not converge is recorded but
+    never chosen: its weights are not the optimum its C defines.
     """
     late = np.asarray(val_times) >= min(cfg.fit_times)
     n, s, h = x_train.shape
@@ -269,11 +271,18 @@ def fit_path(x_train, y_train, x_val, y_val, val_times, cfg: ReadoutConfig = REA
         acc = float(accuracy_by_time(model, x_val, y_val)[late].mean())
         path.append({"c": c, "validation_accuracy": acc, "n_iter": model.n_iter,
                      "converged": bool(model.converged)})
+        if model.solver_message:
+            path[-1]["solver_message"] = model.solver_message
+        if not model.converged:
+            continue
         if acc > best_acc:
             best, best_c, best_acc = model, c, acc
         elif acc < best_acc:
             break                      # past the optimum of the L2 strength
         prev = model
+    if best is None:
+        raise RuntimeError(f"no fit along C = {sorted(cfg.c_grid)} converged (max_iter = "
+                           f"{cfg.max_iter}): {path}")
     return best, best_c, path
 
 
@@ -304,7 +313,7 @@ def learning_curve(folder, key: str, kinds, cfg: ReadoutConfig = READOUT,
             rows.append({"train_trials": n, "c": c, "path": path,
                          "test_accuracy": acc.tolist(),
                          "validation_accuracy_late": max(p["validation_accuracy"]
-                                                         for p in path)})
+                                                         for p in path if p["converged"])})
             out["decoders"][kind] = decoder
             if progress:
                 print(f"{key} {kind} {n} trials: C={c:g}, test accuracy at "

@@ -330,3 +330,31 @@ def test_a_convex_readout_is_described_by_its_fit_not_by_steps(tmp_path):
     row = shipped_table(["generalized_readout"], folder=tmp_path).iloc[0]
     assert row["steps"] == 0 and row["budget"] is None and row["accuracy_200s"] == 0.25
     assert row["hours"] == 1.0 and not row["stopped_early"]
+
+
+def test_a_fit_the_solver_reports_unconverged_is_recorded_and_never_chosen(monkeypatch):
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.linear_model import LogisticRegression
+
+    rng = np.random.default_rng(3)
+    y = rng.integers(0, 3, 300)
+    x = (rng.normal(size=(300, 4)) + np.eye(3, 4)[y] * 2)[:, None, :].repeat(2, 1)
+    fit = LogisticRegression.fit
+
+    def line_search_fails_at_c_10(self, *args, **kwargs):
+        out = fit(self, *args, **kwargs)
+        if self.C == 10.0:            # as L-BFGS reports a failed line search
+            warnings.warn("lbfgs failed to converge (status=2): ABNORMAL_TERMINATION_IN_"
+                          "LNSRCH", ConvergenceWarning)
+        return out
+
+    monkeypatch.setattr(LogisticRegression, "fit", line_search_fails_at_c_10)
+    cfg = replace(R.READOUT, c_grid=(1.0, 10.0), fit_times=(0.4, 0.8))
+    best, c, path = R.fit_path(x, y, x, y, [0.4, 0.8], cfg)
+    assert c == 1.0 and [p["converged"] for p in path] == [True, False]
+    assert "ABNORMAL_TERMINATION_IN_LNSRCH" in path[1]["solver_message"]
+    assert "solver_message" not in path[0]
+    with pytest.raises(RuntimeError, match="no fit along C"):
+        R.fit_path(x, y, x, y, [0.4, 0.8], replace(cfg, c_grid=(10.0,)))

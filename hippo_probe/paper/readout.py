@@ -527,6 +527,11 @@ def plot_readout(results: list, *, study: float = 0.85, chance: float = 0.01):
     ax_t.set_xlabel("time in trial (s)")
     ax_t.set_title("F  readout of the frozen generalized network", fontsize=9)
     ax_n.set_xscale("log")
+    # the sizes themselves as ticks: log-scale minor labels overlap at these ranges
+    sizes = sorted({r["train_trials"] for res in results for v in res["kinds"].values()
+                    for r in v["rows"]})
+    ax_n.set_xticks(sizes, [f"{n:,}" for n in sizes])
+    ax_n.xaxis.set_minor_formatter(plt.NullFormatter())
     ax_n.set_xlabel("training trials")
     ax_n.set_title(f"accuracy at {int(results[0]['kinds']['h']['times'][-1])} s vs "
                    "training-set size", fontsize=9)

@@ -461,9 +461,10 @@ def seed_summary(results: list) -> str:
 
     lines = ["| world | features | training trials | networks | accuracy at 100 s | "
              "accuracy at 200 s |", "| --- | --- | --- | --- | --- | --- |"]
-    order = sorted(groups, key=lambda g: (g[0], not g[1], g[3]))
-    for world, _, label, n in order:
-        a100, a200 = zip(*groups[world, _, label, n])
+    # per world: the study's readout first, then the variant, each by training-set size
+    for key in sorted(groups, key=lambda g: (g[0], not g[1], g[3])):
+        world, _, label, n = key
+        a100, a200 = zip(*groups[key])
         lines.append(f"| {world} | {label} | {n:,} | {len(a100)} | {spread(a100)} | "
                      f"{spread(a200)} |")
     return "\n".join(lines) + "\n"

@@ -11,8 +11,11 @@
 #
 # lane A  the L1 sweep of the `nonneg` variant (scripts/sweep_activity_l1.sh), then
 #         `nonneg` and `dale` at the weight the sweep keeps, 20,000 steps each
-# lane B  the place-cell variant on the generalized task, one seed, 20,000 steps, then the
-#         study's network trained the same way (the scorecard's reference at equal budget)
+# lane B  the shipped specialized network (seed 0) trained on with a fresh schedule until
+#         the 1% rule ends it (its arena accuracy was still rising at the end of its
+#         40,000 steps), then the place-cell variant on the generalized task, one seed,
+#         20,000 steps, then the study's network trained the same way (the scorecard's
+#         reference at equal budget)
 #
 # Done: the shipped generalized network (seed 0) trained on with a fresh schedule, ended by
 # the 1% rule after 15,000 more steps (docs/guides/results.md, "The generalized network
@@ -45,7 +48,18 @@ lane_a() {
       --snapshot-every 5000 || return 1
   done
 }
+finished() {                    # NAME: trained to its end and its checkpoint pruned
+  [ -f "runs/$1/log.json" ] && [ ! -f "runs/$1/checkpoint.pt" ]
+}
+
 lane_b() {
+  if finished specialized_s0_continued; then
+    echo "$(date -u +%FT%TZ) specialized_s0_continued finished before; kept"
+  else
+    train specialized_s0_continued --task specialized --init-from specialized \
+      --init-seed 0 --steps 60000 --lr 3e-4 --lr-final 3e-5 --snapshot-every 2500 \
+      || return 1
+  fi
   train generalized_placecells_s0 --task generalized --variant placecells --init-seed 0 \
     --steps 20000 --stop-improvement 0 --snapshot-every 5000 || return 1
   # the reference at the same budget: the study's network trained like the variants

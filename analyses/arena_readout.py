@@ -31,6 +31,7 @@ from dataclasses import asdict, replace
 from pathlib import Path
 
 import torch
+from threadpoolctl import threadpool_limits
 
 import hippo_probe as hp
 from hippo_probe.model.checkpoint import save_atomic
@@ -90,6 +91,9 @@ def main():
     ap.add_argument("--export", default=None, metavar="FOLDER")
     ap.add_argument("--extract-only", action="store_true",
                     help="only write the features (to fit later, e.g. on another core)")
+    ap.add_argument("--threads", type=int, default=1,
+                    help="threads of the network's forward pass and of the fits' BLAS "
+                         "(default 1: one process per core, e.g. one per seed)")
     ap.add_argument("--no-progress", action="store_true")
     ap.add_argument("--plot-only", action="store_true",
                     help="only draw <out>/arena_readout.png and tabulate arena_readout.md "
@@ -111,7 +115,10 @@ def main():
         print(f"saved {Path(a.out) / 'arena_readout.png'} and arena_readout.md from "
               f"{len(files)} networks")
         return
-    torch.set_num_threads(1)
+    # the fits' L-BFGS runs in NumPy/SciPy's BLAS, whose thread pool torch does not set:
+    # unbounded, two processes on two cores oversubscribe them
+    torch.set_num_threads(a.threads)
+    threadpool_limits(a.threads)
     cfg = replace(R.READOUT, sizes=tuple(sorted(set(a.sizes))), taus=tuple(a.taus),
                   c_grid=tuple(sorted(set(a.c_grid))))
     base = network_name("generalized", a.world)

@@ -21,10 +21,9 @@ import json
 import time
 from pathlib import Path
 
-import torch
-
 import hippo_probe as hp
 from hippo_probe._atomic import write_text
+from hippo_probe._threads import limit_threads
 from hippo_probe.tasks import make_trials
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,7 +45,7 @@ def main():
                     help="training seeds of the networks (default: 0)")
     ap.add_argument("--out", default=str(ROOT / "figures"))
     a = ap.parse_args()
-    torch.set_num_threads(1)
+    limit_threads(1)          # one process per core: BLAS too, not only torch
     results = {}
     lines = ["| network | seed | C | " + " | ".join(
         f"test accuracy at {t} s (train)" for t in TIMES_S) + " |",

@@ -30,10 +30,8 @@ import time
 from dataclasses import asdict, replace
 from pathlib import Path
 
-import torch
-from threadpoolctl import threadpool_limits
-
 import hippo_probe as hp
+from hippo_probe._threads import limit_threads
 from hippo_probe.model.checkpoint import save_atomic
 from hippo_probe.paper import readout as R
 from hippo_probe.paper.config import network_name
@@ -115,10 +113,7 @@ def main():
         print(f"saved {Path(a.out) / 'arena_readout.png'} and arena_readout.md from "
               f"{len(files)} networks")
         return
-    # the fits' L-BFGS runs in NumPy/SciPy's BLAS, whose thread pool torch does not set:
-    # unbounded, two processes on two cores oversubscribe them
-    torch.set_num_threads(a.threads)
-    threadpool_limits(a.threads)
+    limit_threads(a.threads)
     cfg = replace(R.READOUT, sizes=tuple(sorted(set(a.sizes))), taus=tuple(a.taus),
                   c_grid=tuple(sorted(set(a.c_grid))))
     base = network_name("generalized", a.world)

@@ -32,11 +32,11 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
-import torch
 from localization_vs_pf import errors, load, pf_estimate
 
 import hippo_probe as hp
 from hippo_probe._atomic import save_figure, write_text
+from hippo_probe._threads import limit_threads
 from hippo_probe.paper import readout as R
 from hippo_probe.tasks import make_trials, task_config
 
@@ -86,7 +86,7 @@ def main():
                     help="the readout's feature cache (resumable)")
     ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "map_ingredients"))
     a = ap.parse_args()
-    torch.set_num_threads(1)
+    limit_threads(1)          # one process per core: BLAS too, not only torch
     out = Path(a.out)
     rows, maps, pf = [], {}, {}
     for name in a.networks:

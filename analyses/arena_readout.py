@@ -62,6 +62,17 @@ def ship_log(file: Path, res: dict, row: dict, folder, target: str,
     write_text(Path(folder) / f"{target}.log.json", json.dumps(log, indent=1), what="export")
 
 
+def earlier_tau_choice(before, key: str, tau_size: int, tau_c: float, cfg):
+    """The variant's time constant as an earlier run chose it on these features, at the
+    same size and C among the same candidates (the scan is then not repeated), or None."""
+    choice = (before or {}).get("leaky_tau_choice")
+    if (choice is None or before.get("features") != key
+            or choice["train_trials"] != tau_size or choice["c"] != tau_c
+            or set(choice["validation_accuracy_late"]) != set(R.feature_kinds(cfg)[1:])):
+        return None
+    return choice
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--world", default="darkness", choices=("darkness", "compass"))
@@ -135,29 +146,36 @@ def main():
         return
     for name, net in nets.items():
         t1, key = time.time(), keys[name]
+        out_file = Path(a.out) / f"{name}.json"
+        before = json.loads(out_file.read_text()) if out_file.exists() else None
         res = R.learning_curve(a.features, key, ["h"] if "h" in a.kinds else [], cfg)
         decoders = res.pop("decoders")
         if "leaky" in a.kinds:
-            # the time constant is chosen at one size and one C (each fit of the scan is
-            # as costly as the study's readout), then fitted along the whole C grid
-            scan = R.learning_curve(a.features, key, R.feature_kinds(cfg)[1:],
-                                    replace(cfg, c_grid=(a.tau_c,)), sizes=(a.tau_size,))
-            scan.pop("decoders")
-            at = {k: v["rows"][-1]["validation_accuracy_late"]
-                  for k, v in scan["kinds"].items()}
-            best = max(at, key=at.get)
-            res["leaky_tau_choice"] = {"train_trials": a.tau_size, "c": a.tau_c,
-                                       "validation_accuracy_late": at, "chosen": best}
-            chosen = R.learning_curve(a.features, key, [best], cfg)
+            choice = earlier_tau_choice(before, key, a.tau_size, a.tau_c, cfg)
+            if choice is None:
+                # the time constant is chosen at one size and one C (each fit of the
+                # scan is as costly as the study's readout), then fitted along the C grid
+                scan = R.learning_curve(a.features, key, R.feature_kinds(cfg)[1:],
+                                        replace(cfg, c_grid=(a.tau_c,)),
+                                        sizes=(a.tau_size,))
+                scan.pop("decoders")
+                at = {k: v["rows"][-1]["validation_accuracy_late"]
+                      for k, v in scan["kinds"].items()}
+                choice = {"train_trials": a.tau_size, "c": a.tau_c,
+                          "validation_accuracy_late": at, "chosen": max(at, key=at.get)}
+            else:
+                print(f"{key}: time constant chosen before on the same features and "
+                      f"candidates: {choice['chosen']}", flush=True)
+            res["leaky_tau_choice"] = choice
+            chosen = R.learning_curve(a.features, key, [choice["chosen"]], cfg)
             chosen.pop("decoders")
             res["kinds"].update(chosen["kinds"])
         res.update(network=name, features=key, world=a.world,
                    config=dict(asdict(cfg), taus=[str(t) for t in cfg.taus]),
                    fit_seconds=round(time.time() - t1))
-        out_file = Path(a.out) / f"{name}.json"
-        if out_file.exists():
+        if before is not None:
             # another size or kind of the same features extends the learning curve
-            res = R.merge_results(json.loads(out_file.read_text()), res)
+            res = R.merge_results(before, res)
             print(f"added to {out_file}", flush=True)
         R.write_json(out_file, res)
         if a.export and "h" in decoders:

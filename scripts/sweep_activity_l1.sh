@@ -11,6 +11,9 @@
 #   nohup bash scripts/sweep_activity_l1.sh > logs/sweep_l1.log 2>&1 &
 set -u
 cd "$(dirname "$0")/.."
+# the project's virtual environment, where it has one: a job started from a shell that
+# did not activate it still finds the command line
+if [ -x .venv/bin/hippo-probe ]; then PATH="$PWD/.venv/bin:$PATH"; fi
 mkdir -p logs
 for weight in 0 0.01 0.1 1; do
   name=sweep_nonneg_l1_$weight

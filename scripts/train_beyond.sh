@@ -25,6 +25,9 @@
 #     --snapshot-every 2500
 set -u
 cd "$(dirname "$0")/.."
+# the project's virtual environment, where it has one: a job started from a shell that
+# did not activate it still finds the command line
+if [ -x .venv/bin/hippo-probe ]; then PATH="$PWD/.venv/bin:$PATH"; fi
 mkdir -p logs
 
 train() {                       # NAME [options...]

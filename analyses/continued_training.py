@@ -69,22 +69,23 @@ def probe_by_step(probe: Path, run_name: str, base_name: str) -> dict:
     return dict(sorted(out.items()))
 
 
+def plot_both_runs(ax, base, cont, offset):
+    """A validation curve of the shipped run, then of its continuation after ``offset``."""
+    ax.plot(*zip(*base), color="0.5", lw=1, label="shipped run")
+    ax.plot([offset + s for s, _ in cont], [v for _, v in cont], color="k", lw=1,
+            label="trained on (fresh schedule)")
+    ax.axvline(offset, color="tab:blue", ls=":", lw=1)
+
+
 def plot(base, cont, offset, probe, label, accuracy=None):
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.6), layout="constrained")
-    a.plot(*zip(*base), color="0.5", lw=1, label="shipped run")
-    a.plot([offset + s for s, _ in cont], [e for _, e in cont], color="k", lw=1,
-           label="trained on (fresh schedule)")
-    a.axvline(offset, color="tab:blue", ls=":", lw=1)
+    plot_both_runs(a, base, cont, offset)
     a.set(xlabel="training step", ylabel="validation error (m)", yscale="log",
           title=f"{label}: validation error")
     a.legend(frameon=False)
     if accuracy is not None:
         # a specialized network: its own classifier, validation trials, mean over the trial
-        base_acc, cont_acc = accuracy
-        b.plot(*zip(*base_acc), color="0.5", lw=1, label="shipped run")
-        b.plot([offset + s for s, _ in cont_acc], [v for _, v in cont_acc], color="k",
-               lw=1, label="trained on (fresh schedule)")
-        b.axvline(offset, color="tab:blue", ls=":", lw=1)
+        plot_both_runs(b, *accuracy, offset)
         b.set(xlabel="training step", ylabel="validation arena accuracy (mean over trial)",
               title="arena classification (chance 0.01)")
         b.legend(frameon=False, fontsize=8)

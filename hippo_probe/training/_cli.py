@@ -1,5 +1,8 @@
 """``hippo-probe train`` and ``hippo-probe evaluate``."""
 
+import contextlib
+import signal
+
 from .._cli_common import check_output, count, one_of
 from .._cli_trials import add_trial_options
 from ..tasks import TASKS
@@ -137,10 +140,34 @@ def _train(a):
                          max_hours=a.max_hours or None,
                          snapshot_every=a.snapshot_every, variant=a.variant,
                          activity_l1=a.activity_l1)
-    log = fit(config, a.out, progress=not a.no_progress, cache_dir=a.cache_dir,
-              overwrite=a.overwrite)
+    with _sigterm_as_interrupt():
+        try:
+            log = fit(config, a.out, progress=not a.no_progress, cache_dir=a.cache_dir,
+                      overwrite=a.overwrite)
+        except KeyboardInterrupt as stop:
+            # the trainer wrote its checkpoint before re-raising
+            print(f"hippo-probe train: stopped; the same command resumes from "
+                  f"{os.path.join(a.out, 'checkpoint.pt')}", file=sys.stderr)
+            signum = stop.args[0] if stop.args else signal.SIGINT
+            return 128 + int(signum)      # the shell's convention: 130 Ctrl-C, 143 kill
     if "test" in log:
         print(json.dumps(log["test"], indent=1))
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """Treat SIGTERM (``kill``, a scheduler's stop, a session's end) as Ctrl-C while
+    training: the trainer checkpoints on KeyboardInterrupt, and a job started in the
+    background with ``&`` ignores SIGINT, so without this only a periodic checkpoint
+    would survive a stop."""
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt(signum)
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _evaluate(a):

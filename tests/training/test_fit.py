@@ -203,6 +203,37 @@ def test_kill_and_resume(uninterrupted, tmp_path):
     assert [e["loss"] for e in log["train"]] == [e["loss"] for e in reference["train"]]
 
 
+def test_train_command_stopped_by_sigterm_checkpoints_and_resumes(uninterrupted, tmp_path):
+    """`kill` (SIGTERM) stops a `hippo-probe train` job with a checkpoint of the step it
+    reached, though no periodic checkpoint was due; the same command resumes from it."""
+    d, _ = uninterrupted
+    run = tmp_path / "run"
+    command = [sys.executable, "-m", "hippo_probe.cli", "train", "--task", "specialized",
+               "--out", str(run), "--cache-dir", str(d / "cache"), "--trials", "48",
+               "--steps", "300", "--batch-size", "8", "--hidden-size", "8",
+               "--validate-every", "1000", "--validation-trials", "8", "--test-trials", "8",
+               "--threads", "1", "--precision", "fp32", "--checkpoint-minutes", "600",
+               "--snapshot-every", "2", "--no-progress"]
+    proc = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    first = run / "snapshots" / "step_000002.pt"      # it is training
+    deadline = time.time() + 120
+    while not first.exists() and proc.poll() is None and time.time() < deadline:
+        time.sleep(0.05)
+    assert first.exists(), proc.stderr.read() if proc.poll() is not None else "no step"
+    assert not (run / "checkpoint.pt").exists()
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert "resumes from" in err and "Traceback" not in err
+    stopped_at = torch.load(run / "checkpoint.pt", weights_only=False)["step"]
+    assert 2 <= stopped_at < 300
+    assert not [p.name for p in run.iterdir() if p.name.startswith(".") and p.name != ".lock"]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    log = json.loads((run / "log.json").read_text())
+    assert log["resumed_at"] == [stopped_at] and len(log["train"]) == 300
+
+
 def test_resume_refuses_another_configuration(uninterrupted):
     d, _ = uninterrupted
     with pytest.raises(ValueError, match=r"another configuration \(lr: checkpoint 0.001"):

@@ -34,8 +34,9 @@ train() {                       # NAME TASK SEED [extra options...]
     echo "$(date -u +%FT%TZ) $name failed (exit $rc): see logs/$name.log"
     return "$rc"
   fi
+  # --overwrite: a run resumed after an earlier export ships its newer parameters
   hippo-probe export-network "runs/$name" "$shipped" --dest hippo_probe/pretrained \
-    >> "logs/$name.log" 2>&1 &&
+    --overwrite >> "logs/$name.log" 2>&1 &&
     echo "$(date -u +%FT%TZ) done $name -> hippo_probe/pretrained/$shipped.pt"
 }
 

@@ -110,6 +110,8 @@ def add_commands(sub):
     x.add_argument("--dest", required=True, metavar="FOLDER",
                    help="folder to write into (the repository's shipped networks: "
                         "hippo_probe/pretrained)")
+    x.add_argument("--overwrite", action="store_true",
+                   help="replace a network already exported under NAME in FOLDER")
     x.set_defaults(run=_export)
 
 
@@ -211,5 +213,5 @@ def _export(a):
     from .export import export_network
 
     check_output("--dest", a.dest, kind="folder")
-    paths = export_network(a.run_dir, a.name, a.dest)
+    paths = export_network(a.run_dir, a.name, a.dest, overwrite=a.overwrite)
     print("\n".join(f"wrote {p}" for p in paths))

@@ -62,7 +62,7 @@ def _readout_if_shipped_base(network: dict, init_from, dest, name: str) -> dict:
         return network
 
 
-def export_network(run_dir, name: str, dest) -> list:
+def export_network(run_dir, name: str, dest, *, overwrite: bool = False) -> list:
     """Write ``<dest>/<name>.pt`` (best parameters so far, architecture, task, test
     metrics if the run finished) and ``<dest>/<name>.log.json`` (the training log; its
     per-step entries thinned to every ``train_every``-th step, at most
@@ -70,6 +70,9 @@ def export_network(run_dir, name: str, dest) -> list:
 
     Works on a finished run (``network.pt``) or on a run in progress (its last
     checkpoint's best parameters); the log says which (``finished``, ``steps_done``).
+    A network already under ``name`` in ``dest`` is replaced only with
+    ``overwrite=True``: in the repository's ``hippo_probe/pretrained`` it is a shipped
+    network that the figures and RESULTS.md were made from.
     """
     if not isinstance(name, str) or not _NAME.fullmatch(name):
         raise ValueError(f"`name` must be letters, digits, '_' or '-' (a file name inside "
@@ -77,6 +80,10 @@ def export_network(run_dir, name: str, dest) -> list:
     run_dir = Path(run_dir)
     # the destination is always the caller's: the package never writes into its own folder
     dest = Path(dest)                # made (with its parents) by the first write into it
+    if (dest / f"{name}.pt").exists() and not overwrite:
+        raise FileExistsError(f"`name` {name!r}: {str(dest / f'{name}.pt')!r} exists; pass "
+                              f"overwrite=True (--overwrite) to replace it, or choose "
+                              f"another name")
     ckpt = require(load(run_dir / "checkpoint.pt"),
                    ("log", "step", "config", "model", "best_model", "best_loss",
                     "model_config", "task"), run_dir / "checkpoint.pt", "export a network")

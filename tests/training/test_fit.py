@@ -371,6 +371,24 @@ def test_export_refuses_a_name_that_is_not_a_plain_file_name(uninterrupted, tmp_
     assert not (tmp_path / "outside.pt").exists() and not (tmp_path / "dest").exists()
 
 
+def test_export_replaces_an_exported_network_only_when_told(uninterrupted, tmp_path, capsys):
+    from hippo_probe.cli import main
+    from hippo_probe.training import export_network
+    d, _ = uninterrupted
+    pt, js = export_network(d / "run", "tiny_kept", dest=tmp_path)
+    before, log = _params(pt), js.read_text()
+    pt.write_bytes(b"stands for a shipped network")
+    with pytest.raises(FileExistsError, match="`name` 'tiny_kept': .* exists; pass "
+                                              r"overwrite=True \(--overwrite\)"):
+        export_network(d / "run", "tiny_kept", dest=tmp_path)
+    argv = ["export-network", str(d / "run"), "tiny_kept", "--dest", str(tmp_path)]
+    assert main(argv) == 2 and "exists" in capsys.readouterr().err
+    assert pt.read_bytes() == b"stands for a shipped network"
+    assert main([*argv, "--overwrite"]) == 0
+    _assert_same(_params(pt), before)
+    assert js.read_text() == log
+
+
 def test_evaluate_refuses_no_trials_and_a_broken_network(uninterrupted, tmp_path, capsys):
     from hippo_probe.cli import main
     from hippo_probe.training import export_network

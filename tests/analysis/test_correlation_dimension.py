@@ -111,11 +111,14 @@ def _pair_counts_with_arrays(points, order, trial, theiler, edges, block):
     return np.cumsum(hist)[:-1], n_pairs
 
 
-def test_pair_counts_are_bit_for_bit_those_of_the_array_formulation():
+@pytest.mark.parametrize("units", [64, 256])
+def test_pair_counts_are_bit_for_bit_those_of_the_array_formulation(units):
     """Same squared distances, same bins: the figures' numbers do not move (LSTM-like
-    states: tanh of correlated Gaussians, edges as correlation_dimension draws them)."""
+    states: tanh of correlated Gaussians, edges as correlation_dimension draws them). The
+    array formulation multiplies every block by all points, pair_counts by the points from
+    the block on; 256 units are the networks', and 1,500 points leave a partial block."""
     rng = np.random.default_rng(3)
-    x = np.tanh(rng.standard_normal((1500, 8)) @ rng.standard_normal((8, 64)))
+    x = np.tanh(rng.standard_normal((1500, 8)) @ rng.standard_normal((8, units)))
     order = np.tile(np.arange(500), 3)
     trial = np.repeat([0, 1, 2], 500)
     edges = np.logspace(-3, np.log10(2 * np.sqrt((x ** 2).sum(1)).max()), 121)

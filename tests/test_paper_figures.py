@@ -388,6 +388,20 @@ def test_runs_at_once_start_with_each_interleave_worlds():
         "darkness-seed0", "compass-seed0", "darkness-seed1", "darkness-seed2"]
 
 
+@pytest.mark.parametrize("before,after", [
+    (None, "glibc.malloc.hugetlb=1"),
+    ("glibc.malloc.arena_max=2", "glibc.malloc.arena_max=2:glibc.malloc.hugetlb=1"),
+    ("glibc.malloc.hugetlb=0", "glibc.malloc.hugetlb=0")])
+def test_figure_workers_ask_for_huge_pages_unless_told_otherwise(monkeypatch, before, after):
+    from hippo_probe._main import _huge_pages_for_malloc
+
+    if before is None:
+        monkeypatch.delenv("GLIBC_TUNABLES", raising=False)
+    else:
+        monkeypatch.setenv("GLIBC_TUNABLES", before)
+    assert _huge_pages_for_malloc() == after
+
+
 def test_a_worlds_runs_share_the_filters_of_the_same_trials_only(tmp_path, monkeypatch):
     """The recordings' reference-filter estimates are made once for two networks' runs,
     are those the filters give on the run's own trials, and are made again for other

@@ -6,6 +6,9 @@
 #
 #   nohup bash scripts/train_beyond.sh > logs/beyond.log 2>&1 &
 #
+# Stop it with `pkill -TERM -f "hippo-probe train"`: each run checkpoints the step it
+# reached and exits, and its lane stops instead of starting the next run.
+#
 # Every variant run and its faithful reference trains exactly 20,000 steps (the stopping
 # rule off, as in the sweep): the scorecard compares them at equal budget.
 #

@@ -214,6 +214,8 @@ def _huge_pages_for_malloc() -> str:
     in anew. A 750-trial recording after the first: 0.66 million page faults, 8.6-11.5 s;
     with huge pages 8,000 faults, 6.8-7.6 s. (Keeping freed blocks in the heap instead,
     as training does, was as fast but raised the main job's peak memory from 4 to 7 GB.)
+    Only spawned workers can be given it (glibc reads it at start): with ``--jobs 1``
+    the figures run in this process without it.
     """
     tunables = [t for t in os.environ.get("GLIBC_TUNABLES", "").split(":") if t]
     if not any(t.startswith("glibc.malloc.hugetlb=") for t in tunables):

@@ -6,8 +6,9 @@
 #
 #   nohup bash scripts/train_beyond.sh > logs/beyond.log 2>&1 &
 #
-# Stop it with `pkill -TERM -f "hippo-probe train"`: each run checkpoints the step it
-# reached and exits, and its lane stops instead of starting the next run.
+# Stop it with `pkill -TERM -f "hippo-probe train .*--out runs/"` (every trainer on the
+# machine whose run folder is under runs/): each run checkpoints the step it reached and
+# ends, and its lane stops instead of starting the next run.
 #
 # Every variant run and its faithful reference trains exactly 20,000 steps (the stopping
 # rule off, as in the sweep): the scorecard compares them at equal budget.
@@ -37,9 +38,15 @@ train() {                       # NAME [options...]
   local name=$1
   shift
   echo "$(date -u +%FT%TZ) start $name"
+  local rc=0
   hippo-probe train --threads 1 --checkpoint-minutes 5 --no-progress --out "runs/$name" \
-    "$@" >> "logs/$name.log" 2>&1 || { echo "$(date -u +%FT%TZ) $name failed"; return 1; }
-  echo "$(date -u +%FT%TZ) done $name"
+    "$@" >> "logs/$name.log" 2>&1 || rc=$?
+  case $rc in
+    0) echo "$(date -u +%FT%TZ) done $name" ;;
+    130|143) echo "$(date -u +%FT%TZ) $name stopped (checkpointed; this script resumes it)"
+             return "$rc" ;;
+    *) echo "$(date -u +%FT%TZ) $name failed (exit $rc): see logs/$name.log"; return 1 ;;
+  esac
 }
 
 lane_a() {

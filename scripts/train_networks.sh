@@ -34,10 +34,13 @@ train() {                       # NAME TASK SEED [extra options...]
     echo "$(date -u +%FT%TZ) $name failed (exit $rc): see logs/$name.log"
     return "$rc"
   fi
-  # --overwrite: a run resumed after an earlier export ships its newer parameters
-  hippo-probe export-network "runs/$name" "$shipped" --dest hippo_probe/pretrained \
-    --overwrite >> "logs/$name.log" 2>&1 &&
+  # never over a shipped network (the figures were made from it): that is done by hand
+  if hippo-probe export-network "runs/$name" "$shipped" --dest hippo_probe/pretrained \
+      >> "logs/$name.log" 2>&1; then
     echo "$(date -u +%FT%TZ) done $name -> hippo_probe/pretrained/$shipped.pt"
+  else
+    echo "$(date -u +%FT%TZ) $name trained, not exported: see logs/$name.log"
+  fi
 }
 
 network() {                     # TASK SEED: the study's training-set size, 40,000 steps

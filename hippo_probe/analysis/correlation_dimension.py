@@ -81,15 +81,29 @@ def _count_rows(dots, sq, i0, order, trial, theiler, edges, hist):
     return pairs
 
 
+def block_products(points, i0: int, i1: int) -> np.ndarray:
+    """Dot products of points ``i0 .. i1-1`` with the points from ``i0`` on: the block's
+    row of the upper triangle, half the work of a row of the full matrix.
+
+    Each product is the one the full row ``points[i0:i1] @ points.T`` holds, bit for bit
+    (tested): BLAS computes an element of a general product the same way whatever its
+    width. The last block is the exception: there the two operands are the same points,
+    and NumPy hands a product of an array with its own transpose to a symmetric kernel
+    (``syrk``), which rounds differently; it gets the full row, sliced.
+    """
+    if i1 == len(points) and i0 > 0:
+        return np.ascontiguousarray((points[i0:i1] @ points.T)[:, i0:])
+    return points[i0:i1] @ points[i0:].T
+
+
 def pair_counts(points, order, trial, theiler, edges, block=None):
     """Histogram of pairwise distances over ``edges``, computed in row blocks.
 
     Pairs (i < j) in the same trial with ``|order_i - order_j| < theiler`` are skipped
     (Theiler window). Returns (counts of d < edges[k] for each k, number of pairs).
-    Memory: one ``block x n`` matrix of dot products at a time. Only the products of
-    pairs at or above the diagonal's block are computed, half of the full matrix's work;
-    each is the same BLAS dot product as in the full matrix, so the counts are too
-    (tested).
+    Memory: one ``block x n`` matrix of dot products at a time; only the products of
+    pairs at or above the diagonal's block are computed (:func:`block_products`), each
+    the same as in the full matrix, so the counts are too.
     """
     block = CFG.block if block is None else block
     points = np.ascontiguousarray(points, np.float64)
@@ -105,7 +119,7 @@ def pair_counts(points, order, trial, theiler, edges, block=None):
     n_pairs = 0
     for i0 in range(0, m, block):
         i1 = min(m, i0 + block)
-        n_pairs += _count_rows(points[i0:i1] @ points[i0:].T, sq, i0, order, trial,
+        n_pairs += _count_rows(block_products(points, i0, i1), sq, i0, order, trial,
                                float(theiler), edges, hist)
     return np.cumsum(hist)[:-1], n_pairs
 

@@ -59,40 +59,41 @@ def baselines_from_dataset(ds, batch) -> dict:
 
 
 @torch.no_grad()
-def run_network(network, batch, chunk: int = 250, *, progress: bool = False):
+def _run_network(network, batch, chunk: int = 250, *, progress: bool = False):
     """The network on a TrialBatch, in the recording's layout: (h (B*T, H) float32,
     xy (T, B, 2) float64, class probabilities (B*T, C) float32 or None).
 
     ``h`` and the probabilities are stacked trial after trial (the order of
     :func:`~hippo_probe.recording.layout.stack_trials`). The network runs on ``chunk``
-    trials at a time (bounds memory; the result does not depend on it) and each chunk is
-    written straight into its rows: a 1,000-trial recording's 0.5 GB of units is
-    allocated once, not once more per concatenation, transposition and type conversion.
-    ``progress`` shows a bar over the trials.
+    trials at a time (bounds memory; the result does not depend on it) and each chunk's
+    trials are copied straight into their place: a 1,000-trial recording's 0.5 GB of
+    units is allocated once, not again for a concatenation, a transposition and a
+    type conversion. ``progress`` shows a bar over the trials.
     """
     from tqdm.auto import tqdm
 
     network.eval()
     T, B = batch.inputs.shape[:2]
-    h_out = prob_out = None
+    h_out = prob_out = None            # (B, T, ...): trial-major, reshaped at the end
     xys = []
     with tqdm(total=B, desc=f"record {batch.task}", unit="trial",
               disable=not progress) as bar:
         for lo in range(0, B, chunk):
             xy, logits, h = network(torch.from_numpy(batch.inputs[:, lo:lo + chunk]))
-            rows = slice(lo * T, (lo + h.shape[1]) * T)
+            hi = lo + h.shape[1]
             if h_out is None:
-                h_out = np.empty((B * T, h.shape[2]), np.float32)
-            h_out[rows].reshape(h.shape[1], T, -1)[:] = np.swapaxes(h.numpy(), 0, 1)
+                h_out = np.empty((B, T, h.shape[2]), np.float32)
+            h_out[lo:hi] = np.swapaxes(h.numpy(), 0, 1)
             xys.append(xy.numpy())
             if logits is not None:
                 prob = torch.softmax(logits, dim=-1).numpy()
                 if prob_out is None:
-                    prob_out = np.empty((B * T, prob.shape[2]), np.float32)
-                prob_out[rows].reshape(h.shape[1], T, -1)[:] = np.swapaxes(prob, 0, 1)
+                    prob_out = np.empty((B, T, prob.shape[2]), np.float32)
+                prob_out[lo:hi] = np.swapaxes(prob, 0, 1)
             bar.update(h.shape[1])
     xy = np.concatenate(xys, axis=1).astype(np.float64)
-    return h_out, xy, prob_out
+    return (h_out.reshape(B * T, h_out.shape[2]), xy,
+            None if prob_out is None else prob_out.reshape(B * T, prob_out.shape[2]))
 
 
 def record(network, batch, *, baselines: dict | None = None, session_id: str | None = None,
@@ -147,7 +148,7 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
                       f"{task.world.name!r} trials: its units are recorded outside the "
                       f"world they learned (the recording's attrs say both)", UserWarning,
                       stacklevel=2)
-    h, xy, prob = run_network(network, batch, chunk, progress=progress)
+    h, xy, prob = _run_network(network, batch, chunk, progress=progress)
     T, B, H = xy.shape[0], xy.shape[1], h.shape[1]
     net_task = getattr(network, "task", None) or batch.task
     # the readout speaks in the frame of the task the network was trained on

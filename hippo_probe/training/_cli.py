@@ -1,7 +1,10 @@
 """``hippo-probe train`` and ``hippo-probe evaluate``."""
 
 import contextlib
+import os
 import signal
+import sys
+import threading
 
 from .._cli_common import check_output, count, one_of
 from .._cli_trials import add_trial_options
@@ -117,8 +120,6 @@ def add_commands(sub):
 
 def _train(a):
     import json
-    import os
-    import sys
 
     if "torch" not in sys.modules:
         # OpenMP workers that torch starts before `set_num_threads` takes effect keep
@@ -142,34 +143,53 @@ def _train(a):
                          max_hours=a.max_hours or None,
                          snapshot_every=a.snapshot_every, variant=a.variant,
                          activity_l1=a.activity_l1)
-    with _sigterm_as_interrupt():
+    with _stop_at_a_step_boundary() as received:
         try:
             log = fit(config, a.out, progress=not a.no_progress, cache_dir=a.cache_dir,
-                      overwrite=a.overwrite)
-        except KeyboardInterrupt as stop:
-            # the trainer wrote its checkpoint before re-raising
-            print(f"hippo-probe train: stopped; the same command resumes from "
-                  f"{os.path.join(a.out, 'checkpoint.pt')}", file=sys.stderr)
-            signum = stop.args[0] if stop.args else signal.SIGINT
-            return 128 + int(signum)      # the shell's convention: 130 Ctrl-C, 143 kill
+                      overwrite=a.overwrite, stop_requested=lambda: bool(received))
+        except KeyboardInterrupt:
+            if not received:
+                raise
+            # the trainer checkpointed the step boundary it stopped at
+            print(f"hippo-probe train: stopped by signal {received[0]}; the same command "
+                  f"resumes from {os.path.join(a.out, 'checkpoint.pt')}", file=sys.stderr)
+            _end_by(received[0])
     if "test" in log:
         print(json.dumps(log["test"], indent=1))
 
 
 @contextlib.contextmanager
-def _sigterm_as_interrupt():
-    """Treat SIGTERM (``kill``, a scheduler's stop, a session's end) as Ctrl-C while
-    training: the trainer checkpoints on KeyboardInterrupt, and a job started in the
-    background with ``&`` ignores SIGINT, so without this only a periodic checkpoint
-    would survive a stop."""
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt(signum)
+def _stop_at_a_step_boundary():
+    """While training, SIGINT (Ctrl-C) and SIGTERM (``kill``, a scheduler's stop) ask the
+    trainer to stop at its next step boundary, with a checkpoint; a second such signal
+    ends the process at once (checkpoints are written atomically, so the last one stays
+    whole). Yields the list of the signals received. A signal the process was started to
+    ignore stays ignored (a job started with ``&`` ignores SIGINT, which is why SIGTERM
+    matters), and off the main thread, where Python takes no handlers, nothing changes."""
+    received = []
 
-    previous = signal.signal(signal.SIGTERM, interrupt)
+    def request(signum, frame):
+        if received:
+            _end_by(signum)
+        received.append(signum)
+
+    watched = [] if threading.current_thread() is not threading.main_thread() else [
+        s for s in (signal.SIGINT, signal.SIGTERM)
+        if signal.getsignal(s) is not signal.SIG_IGN]
+    previous = {s: signal.signal(s, request) for s in watched}
     try:
-        yield
+        yield received
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def _end_by(signum):
+    """End the process as the signal ``signum`` would have, so that a shell loop or a job
+    scheduler sees it stopped, not an ordinary exit status."""
+    sys.stdout.flush()
+    signal.signal(signum, signal.SIG_DFL)
+    os.kill(os.getpid(), signum)
 
 
 def _evaluate(a):

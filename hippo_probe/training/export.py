@@ -80,10 +80,12 @@ def export_network(run_dir, name: str, dest, *, overwrite: bool = False) -> list
     run_dir = Path(run_dir)
     # the destination is always the caller's: the package never writes into its own folder
     dest = Path(dest)                # made (with its parents) by the first write into it
-    if (dest / f"{name}.pt").exists() and not overwrite:
-        raise FileExistsError(f"`name` {name!r}: {str(dest / f'{name}.pt')!r} exists; pass "
-                              f"overwrite=True (--overwrite) to replace it, or choose "
-                              f"another name")
+    existing = [str(p) for p in (dest / f"{name}.pt", dest / f"{name}.log.json") if p.exists()]
+    if existing and not overwrite:
+        raise FileExistsError(f"`name` {name!r}: {', '.join(existing)} exist(s); pass "
+                              f"overwrite=True (--overwrite) to replace, or choose another "
+                              f"name (a readout shipped against a replaced network no "
+                              f"longer loads)")
     ckpt = require(load(run_dir / "checkpoint.pt"),
                    ("log", "step", "config", "model", "best_model", "best_loss",
                     "model_config", "task"), run_dir / "checkpoint.pt", "export a network")

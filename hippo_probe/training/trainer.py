@@ -302,7 +302,8 @@ def _distributed(device: str = "cpu"):
 
 
 def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
-        stop_after: int | None = None, overwrite: bool = False) -> dict:
+        stop_after: int | None = None, overwrite: bool = False,
+        stop_requested=None) -> dict:
     """Train (or resume training) a network; returns the training log.
 
     The process's torch and numba threads are pinned to ``config.threads`` for the run, and
@@ -327,6 +328,11 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
         Start afresh in a folder that holds a finished run's ``network.pt`` or
         ``log.json`` but no checkpoint to resume from (default: refuse, so a pruned
         run's network is not replaced by a new run by mistake).
+    stop_requested : callable, optional
+        Asked before every optimizer step; once it returns True the run checkpoints that
+        step and raises KeyboardInterrupt, as Ctrl-C does, but at a step boundary, where
+        the parameters, the optimizer, the step and the log agree (``hippo-probe train``
+        answers it from SIGINT and SIGTERM).
     """
     overwrite = check_bool("overwrite", overwrite)
     run_dir = Path(run_dir)
@@ -341,10 +347,10 @@ def fit(config: TrainConfig, run_dir, *, progress: bool = True, cache_dir=None,
                     f"`run_dir` {str(run_dir)!r} holds {found} of a run but no "
                     f"checkpoint.pt to resume from; starting afresh would replace "
                     f"them: pass overwrite=True (--overwrite) or use a new folder")
-        return _fit_pinned(config, run_dir, progress, cache_dir, stop_after)
+        return _fit_pinned(config, run_dir, progress, cache_dir, stop_after, stop_requested)
 
 
-def _fit_pinned(config, run_dir, progress, cache_dir, stop_after):
+def _fit_pinned(config, run_dir, progress, cache_dir, stop_after, stop_requested):
     """``_fit`` with the precision resolved and the process's threads pinned."""
     precision = resolve_precision(config.precision)
     if precision == "bf16" and config.device == "cpu" and not native_bf16():
@@ -362,7 +368,8 @@ def _fit_pinned(config, run_dir, progress, cache_dir, stop_after):
         pass
     reuse_freed_memory()    # each step's activations, reused instead of page-faulted anew
     try:
-        return _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after)
+        return _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after,
+                    stop_requested)
     finally:
         torch.set_num_threads(threads_before)   # don't leave a Jupyter kernel pinned
 
@@ -379,7 +386,7 @@ def _sole_trainer(run_dir: Path):
     return exclusive_lock(run_dir / ".lock", refuse)
 
 
-def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
+def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after, stop_requested):
     run_dir.mkdir(parents=True, exist_ok=True)
     task = task_config(config.task, config.world)
     n_trials = config.n_trials or task.train_trials
@@ -454,6 +461,8 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
     done_here = 0
     try:
         while step < config.steps:
+            if stop_requested is not None and _agreed(stop_requested(), world_size, device):
+                raise KeyboardInterrupt     # a step boundary: the checkpoint below is whole
             if step % config.validate_every == 0:
                 if rank == 0 and (not log["validation"] or
                                   log["validation"][-1]["step"] != step):
@@ -532,6 +541,15 @@ def _fit(config, run_dir, rank, world_size, progress, cache_dir, stop_after):
     if world_size > 1:
         torch.distributed.barrier()
     return log
+
+
+def _agreed(flag: bool, world_size: int, device) -> bool:
+    """``flag`` of any rank, on every rank (all stop at the same step or none does)."""
+    if world_size == 1:
+        return bool(flag)
+    value = torch.tensor([int(flag)], dtype=torch.int32, device=device)
+    torch.distributed.all_reduce(value, op=torch.distributed.ReduceOp.MAX)
+    return bool(value.item())
 
 
 def _class_weight(config, net, validation) -> float:

@@ -111,14 +111,26 @@ def _pair_counts_with_arrays(points, order, trial, theiler, edges, block):
     return np.cumsum(hist)[:-1], n_pairs
 
 
-@pytest.mark.parametrize("units", [64, 256])
-def test_pair_counts_are_bit_for_bit_those_of_the_array_formulation(units):
-    """Same squared distances, same bins: the figures' numbers do not move (LSTM-like
-    states: tanh of correlated Gaussians, edges as correlation_dimension draws them). The
-    array formulation multiplies every block by all points, pair_counts by the points from
-    the block on; 256 units are the networks', and 1,500 points leave a partial block."""
+@pytest.mark.parametrize("n,units,block", [(1500, 64, 256), (1500, 256, 256),
+                                           (3001, 256, 512), (200, 3, 512)])
+def test_block_products_are_those_of_the_full_matrix_bit_for_bit(n, units, block):
+    """The upper triangle's products equal the full matrix's, element for element, in
+    every block: the partial last block too (a product of the points with themselves
+    would go to a symmetric kernel and round differently), and a single block."""
+    from hippo_probe.analysis.correlation_dimension import block_products
+
     rng = np.random.default_rng(3)
-    x = np.tanh(rng.standard_normal((1500, 8)) @ rng.standard_normal((8, units)))
+    x = np.tanh(rng.standard_normal((n, 8)) @ rng.standard_normal((8, units)))
+    for i0 in range(0, n, block):
+        i1 = min(n, i0 + block)
+        np.testing.assert_array_equal(block_products(x, i0, i1), (x[i0:i1] @ x.T)[:, i0:])
+
+
+def test_pair_counts_are_bit_for_bit_those_of_the_array_formulation():
+    """Same squared distances, same bins: the figures' numbers do not move (LSTM-like
+    states: tanh of correlated Gaussians, edges as correlation_dimension draws them)."""
+    rng = np.random.default_rng(3)
+    x = np.tanh(rng.standard_normal((1500, 8)) @ rng.standard_normal((8, 64)))
     order = np.tile(np.arange(500), 3)
     trial = np.repeat([0, 1, 2], 500)
     edges = np.logspace(-3, np.log10(2 * np.sqrt((x ** 2).sum(1)).max()), 121)

@@ -40,25 +40,32 @@ def test_record_network_recording(specialized_batch):
     np.testing.assert_array_equal(rec.environment_id.values, np.arange(100))
 
 
+@pytest.mark.parametrize("n_classes", [100, 0])
 @pytest.mark.parametrize("chunk", [1, 2, 250])
-def test_a_recording_made_in_chunks_stacks_each_chunks_output(specialized_batch, chunk):
-    """Chunks of trials written into their rows: the arrays of the network run on each
-    chunk, concatenated over trials and stacked trial after trial."""
+def test_a_recording_made_in_chunks_stacks_each_chunks_output(specialized_batch, chunk,
+                                                             n_classes):
+    """Chunks of trials copied into their rows: the arrays of the network run on each
+    chunk, concatenated over trials and stacked trial after trial, in float32 (with and
+    without an arena classifier)."""
     from hippo_probe.recording.layout import stack_trials
     torch.manual_seed(0)
-    net = Navigator(ModelConfig(hidden_size=8, n_classes=100))
-    net.task = "specialized"
+    net = Navigator(ModelConfig(hidden_size=8, n_classes=n_classes))
+    net.task = "specialized" if n_classes else "generalized"
     rec = hp.record(net, specialized_batch, chunk=chunk)
     inputs = specialized_batch.inputs
     with torch.no_grad():
         parts = [net(torch.from_numpy(inputs[:, lo:lo + chunk]))
                  for lo in range(0, inputs.shape[1], chunk)]
-    xy, logits, h = (torch.cat([part[k] for part in parts], dim=1) for k in range(3))
-    np.testing.assert_array_equal(rec.activity.values, stack_trials(h.numpy()))
+    h = torch.cat([part[2] for part in parts], dim=1).numpy()
+    assert rec.activity.dtype == np.float32
+    np.testing.assert_array_equal(rec.activity.values, stack_trials(h))
+    if not n_classes:
+        assert "class_probability" not in rec
+        return
+    logits = torch.cat([part[1] for part in parts], dim=1)
+    assert rec.class_probability.dtype == np.float32
     np.testing.assert_array_equal(rec.class_probability.values,
                                   stack_trials(torch.softmax(logits, -1).numpy()))
-    np.testing.assert_array_equal(rec.estimate.values,
-                                  stack_trials(xy.numpy().astype(np.float64)))
 
 
 def test_record_generalized_estimate_in_arena_frame():

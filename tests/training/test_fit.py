@@ -204,34 +204,58 @@ def test_kill_and_resume(uninterrupted, tmp_path):
 
 
 def test_train_command_stopped_by_sigterm_checkpoints_and_resumes(uninterrupted, tmp_path):
-    """`kill` (SIGTERM) stops a `hippo-probe train` job with a checkpoint of the step it
-    reached, though no periodic checkpoint was due; the same command resumes from it."""
+    """`kill` (SIGTERM) stops a `hippo-probe train` job at a step boundary with a
+    checkpoint of that step, though no periodic checkpoint was due, and the job ends as
+    killed; resumed, the run is the run that was never stopped."""
     d, _ = uninterrupted
     run = tmp_path / "run"
     command = [sys.executable, "-m", "hippo_probe.cli", "train", "--task", "specialized",
                "--out", str(run), "--cache-dir", str(d / "cache"), "--trials", "48",
-               "--steps", "300", "--batch-size", "8", "--hidden-size", "8",
+               "--steps", "100000", "--batch-size", "8", "--hidden-size", "8",
                "--validate-every", "1000", "--validation-trials", "8", "--test-trials", "8",
                "--threads", "1", "--precision", "fp32", "--checkpoint-minutes", "600",
                "--snapshot-every", "2", "--no-progress"]
-    proc = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
-    first = run / "snapshots" / "step_000002.pt"      # it is training
-    deadline = time.time() + 120
-    while not first.exists() and proc.poll() is None and time.time() < deadline:
-        time.sleep(0.05)
-    assert first.exists(), proc.stderr.read() if proc.poll() is not None else "no step"
-    assert not (run / "checkpoint.pt").exists()
-    proc.send_signal(signal.SIGTERM)
-    _, err = proc.communicate(timeout=120)
-    assert proc.returncode == 128 + signal.SIGTERM, err
+    with open(tmp_path / "stderr.txt", "w") as stderr:
+        proc = subprocess.Popen(command, stderr=stderr)
+        first = run / "snapshots" / "step_000002.pt"      # it is training
+        deadline = time.time() + 120
+        while not first.exists() and proc.poll() is None and time.time() < deadline:
+            time.sleep(0.05)
+        assert first.exists(), "no training step"
+        assert not (run / "checkpoint.pt").exists()
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=120)
+    err = (tmp_path / "stderr.txt").read_text()
+    assert proc.returncode == -signal.SIGTERM, err
     assert "resumes from" in err and "Traceback" not in err
     stopped_at = torch.load(run / "checkpoint.pt", weights_only=False)["step"]
-    assert 2 <= stopped_at < 300
-    assert not [p.name for p in run.iterdir() if p.name.startswith(".") and p.name != ".lock"]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    log = json.loads((run / "log.json").read_text())
-    assert log["resumed_at"] == [stopped_at] and len(log["train"]) == 300
+    assert stopped_at >= 2
+    assert not [p.name for p in run.rglob(".*") if p.name != ".lock"]
+    # the command's configuration, resumed for two more steps, against a run never stopped
+    cfg = TrainConfig(**dict(TINY, steps=100000, validate_every=1000, checkpoint_minutes=600,
+                             snapshot_every=2))
+    log = fit(cfg, run, cache_dir=d / "cache", progress=False, stop_after=2)
+    assert log["resumed_at"] == [stopped_at]
+    reference = fit(cfg, tmp_path / "ref", cache_dir=d / "cache", progress=False,
+                    stop_after=stopped_at + 2)
+    _assert_same(_params(run / "checkpoint.pt"), _params(tmp_path / "ref" / "checkpoint.pt"))
+    assert [e["loss"] for e in log["train"]] == [e["loss"] for e in reference["train"]]
+
+
+def test_a_stop_requested_ends_the_run_at_a_step_boundary(uninterrupted, tmp_path):
+    """What Ctrl-C and `kill` ask through `stop_requested`: the run stops before a step,
+    with a checkpoint of the steps it trained, and resumes to the run never stopped."""
+    d, _ = uninterrupted
+    asked = iter([False, False, False, True])
+    with pytest.raises(KeyboardInterrupt):
+        fit(TrainConfig(**TINY), tmp_path / "run", cache_dir=d / "cache", progress=False,
+            stop_requested=lambda: next(asked))
+    ckpt = torch.load(tmp_path / "run" / "checkpoint.pt", weights_only=False)
+    assert ckpt["step"] == 3 and len(ckpt["log"]["train"]) == 3
+    log = fit(TrainConfig(**TINY), tmp_path / "run", cache_dir=d / "cache", progress=False)
+    _assert_same(_params(tmp_path / "run" / "network.pt"),
+                 _params(d / "run" / "network.pt"))
+    assert [e["loss"] for e in log["train"]] == [e["loss"] for e in uninterrupted[1]["train"]]
 
 
 def test_resume_refuses_another_configuration(uninterrupted):
@@ -378,11 +402,15 @@ def test_export_replaces_an_exported_network_only_when_told(uninterrupted, tmp_p
     pt, js = export_network(d / "run", "tiny_kept", dest=tmp_path)
     before, log = _params(pt), js.read_text()
     pt.write_bytes(b"stands for a shipped network")
-    with pytest.raises(FileExistsError, match="`name` 'tiny_kept': .* exists; pass "
+    with pytest.raises(FileExistsError, match="`name` 'tiny_kept': .* exist\\(s\\); pass "
                                               r"overwrite=True \(--overwrite\)"):
         export_network(d / "run", "tiny_kept", dest=tmp_path)
+    pt.rename(tmp_path / "aside.pt")              # its log alone is refused too
+    with pytest.raises(FileExistsError, match="tiny_kept.log.json exist"):
+        export_network(d / "run", "tiny_kept", dest=tmp_path)
+    (tmp_path / "aside.pt").rename(pt)
     argv = ["export-network", str(d / "run"), "tiny_kept", "--dest", str(tmp_path)]
-    assert main(argv) == 2 and "exists" in capsys.readouterr().err
+    assert main(argv) == 2 and "exist(s)" in capsys.readouterr().err
     assert pt.read_bytes() == b"stands for a shipped network"
     assert main([*argv, "--overwrite"]) == 0
     _assert_same(_params(pt), before)

@@ -18,8 +18,9 @@ from the study; ``generalized`` is the study's network.
         [--pf-trials 200] [--readout-trials 4000] [--features cache/readout]
         [--out analyses/data/map_ingredients]
 
-Writes ``<out>/scorecard.json``, ``scorecard.csv`` and ``map_ingredients.png`` (rate maps of
-the same 16 units in the two arenas, per network).
+Writes ``<out>/scorecard.json``, ``scorecard.csv`` and ``map_ingredients.png`` (per network,
+rate maps of its 16 most spatially informative units in the two arenas, and its
+scorecard beside them).
 """
 
 import argparse
@@ -32,6 +33,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+import numpy as np
 from localization_vs_pf import errors, load, pf_estimate
 
 import hippo_probe as hp
@@ -73,6 +75,65 @@ def cell_class_fractions(spikes):
             for name in table.data_vars if name.startswith("is_")}
 
 
+def most_informative_units(information, n):
+    """Indices (ascending) of the ``n`` units with the most spatial information; a silent
+    unit (NaN) comes last."""
+    order = np.argsort(np.nan_to_num(information, nan=-np.inf), kind="stable")[::-1]
+    return np.sort(order[:n])
+
+
+#: The scorecard lines printed beside each network's maps: (label, key, format).
+SCORE_LINES = (("error / PF after 100 s", "error_over_pf_after_100s", "{:.2f}"),
+               ("place-like units", "fraction_place_like", "{:.2f}"),
+               ("median field area", "median_field_area", "{:.3f}"),
+               ("map corr. within", "within_map_correlation", "{:.2f}"),
+               ("map corr. across", "across_map_correlation", "{:.2f}"),
+               ("pop. vector corr. across", "population_vector_correlation", "{:.2f}"),
+               ("silent units", "fraction_silent", "{:.2f}"),
+               ("bits / spike (median)", "median_information_bits_per_spike", "{:.2f}"),
+               ("arena readout at 200 s", "arena_readout_accuracy_200s", "{:.2f}"),
+               ("place fields", "place_fields", "{}"),
+               ("global remapping", "global_remapping", "{}"))
+
+
+def scorecard_figure(maps, shown, rows):
+    """Per network two rows of rate maps (its ``N_SHOWN`` most informative units, the
+    same units in arena 0 and arena 1, each unit's colours spanning its range over both
+    arenas) and its scorecard beside them."""
+    fig = plt.figure(figsize=(N_SHOWN * 0.75 + 3.2, 1.6 * len(maps) + 0.5),
+                     layout="constrained")
+    grid = fig.add_gridspec(2 * len(maps), N_SHOWN + 1,
+                            width_ratios=[1] * N_SHOWN + [4.2])
+    for k, ((name, m), row) in enumerate(zip(maps.items(), rows)):
+        label = Path(name).name if Path(name).exists() else name
+        for u_pos, unit in enumerate(shown[name]):
+            pair = m.isel(unit=int(unit))
+            low, top = float(pair.min()), float(pair.max())
+            if not low < top:           # a silent unit: any range shows it flat
+                low, top = 0.0, 1.0
+            for e in range(2):
+                ax = fig.add_subplot(grid[2 * k + e, u_pos])
+                ax.imshow(pair.isel(environment=e).values, origin="lower",
+                          cmap="viridis", vmin=low, vmax=top)
+                ax.set_xticks([])
+                ax.set_yticks([])
+                if e == 0:
+                    ax.set_title(f"{int(unit)}", fontsize=6, pad=1)
+                if u_pos == 0:
+                    ax.set_ylabel(f"arena {e}", fontsize=6)
+        text = fig.add_subplot(grid[2 * k:2 * k + 2, N_SHOWN])
+        text.axis("off")
+        lines = [f"{label} ({row['variant']}"
+                 + (", a departure)" if row["departure_from_study"] else ", the study's)")]
+        lines += [f"{what:<25}" + ("—" if row[key] is None else fmt.format(row[key]))
+                  for what, key, fmt in SCORE_LINES]
+        text.text(0.0, 1.0, "\n".join(lines), va="top", ha="left", family="monospace",
+                  fontsize=6, transform=text.transAxes)
+    fig.suptitle("each network's 16 most spatially informative units (numbered), the same "
+                 "units in two arenas; colours span each unit's range over both", fontsize=8)
+    return fig
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--networks", nargs="+", default=["generalized"],
@@ -88,7 +149,7 @@ def main():
     a = ap.parse_args()
     limit_threads(1)          # one process per core: BLAS too, not only torch
     out = Path(a.out)
-    rows, maps, pf = [], {}, {}
+    rows, maps, shown, pf = [], {}, {}, {}
     for name in a.networks:
         t0 = time.time()
         net = load(name)
@@ -117,6 +178,7 @@ def main():
                "seconds": round(time.time() - t0)}
         rows.append(row)
         maps[name] = hp.ratemaps(rec, bin_size=0.03, by="environment")
+        shown[name] = most_informative_units(info.information.values, N_SHOWN)
         print(json.dumps(row), flush=True)
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "scorecard.json", json.dumps(
@@ -127,24 +189,9 @@ def main():
     write_text(out / "scorecard.csv", "\n".join(
         [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]) + "\n",
         what="out")
-    fig, axes = plt.subplots(2 * len(maps), N_SHOWN, figsize=(N_SHOWN * 0.9,
-                                                               2 * len(maps) * 0.95),
-                             squeeze=False)
-    for k, (name, m) in enumerate(maps.items()):
-        for e in range(2):
-            for u in range(N_SHOWN):
-                ax = axes[2 * k + e, u]
-                ax.imshow(m.isel(unit=u, environment=e).values, origin="lower",
-                          cmap="viridis")
-                ax.set_xticks([])
-                ax.set_yticks([])
-                if u == 0:
-                    label = Path(name).name if Path(name).exists() else name
-                    ax.set_ylabel(f"{label}\narena {e}", fontsize=6)
-    fig.suptitle("rate maps of units 0-15 in two arenas (rows), per network", fontsize=8)
+    fig = scorecard_figure(maps, shown, rows)
     save_figure(fig, out / "map_ingredients.png", dpi=110)
     plt.close(fig)
-
 
 if __name__ == "__main__":
     main()

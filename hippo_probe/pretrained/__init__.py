@@ -7,6 +7,10 @@ name, ``localization``, ``generalized``, ``specialized`` and ``generalized_reado
 generalized network with a retrained arena readout); the compass world's as
 ``localization_compass``, ``generalized_compass``, ``specialized_compass`` and
 ``generalized_compass_readout``, kept for the ablation (what the compass takes away).
+Variants that depart from the study's network, each trained 20,000 steps on the
+generalized task of the darkness world (``docs/guides/results.md``, "The map-ingredient
+scorecard"): ``generalized_nonneg`` (non-negative units, h = o * relu(tanh c), with an L1
+activity cost).
 A network knows its world (``net.world``): record it, evaluate it and compare it with
 baselines on trials of that world. Each name may ship several training seeds:
 ``<name>.pt`` is the seed reported first (``seed=0``), ``<name>_seed<k>.pt`` seed ``k``.
@@ -19,7 +23,7 @@ from pathlib import Path
 HERE = Path(__file__).parent
 NAMES = ("localization", "generalized", "specialized", "generalized_readout",
          "localization_compass", "generalized_compass", "specialized_compass",
-         "generalized_compass_readout")
+         "generalized_compass_readout", "generalized_nonneg")
 
 #: The world of a checkpoint that does not name one: every such file was made before the
 #: darkness world existed.

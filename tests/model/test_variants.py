@@ -147,3 +147,14 @@ def test_the_place_cell_decoding_floor_is_the_one_documented():
                           .astype(np.float32))
     off = (readout.targets(xy) @ readout.centres - xy).norm(dim=-1)
     assert 0.02 < float(off.mean()) < 0.03 and float(off.quantile(0.95)) < 0.06
+
+
+def test_the_shipped_non_negative_variant_records_non_negative_sparse_units():
+    net = hp.load_pretrained("generalized_nonneg")
+    assert (net.config.variant, net.world) == ("nonneg", "darkness")
+    assert net.info["config"]["activity_l1"] == 1.0
+    rec = hp.record(net, hp.tasks.make_trials("generalized", 2, "test", 0))
+    rates = rec.activity.values
+    assert rates.min() >= 0.0
+    # the L1 cost leaves most units silent and the rest sparse
+    assert np.mean(rates.max(axis=0) < 1e-3) > 0.3

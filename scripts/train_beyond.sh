@@ -14,12 +14,13 @@
 # rule off, as in the sweep): the scorecard compares them at equal budget.
 #
 # lane A  the L1 sweep of the `nonneg` variant (scripts/sweep_activity_l1.sh), then
-#         `nonneg` and `dale` at the weight the sweep keeps, 20,000 steps each
+#         `nonneg` and `dale` at the weight the sweep keeps, 20,000 steps each, then
+#         `nonneg` seed 1 (it showed place fields by the scorecard's rule)
 # lane B  the shipped specialized network (seed 0) trained on with a fresh schedule until
 #         the 1% rule ends it (its arena accuracy was still rising at the end of its
 #         40,000 steps), then the place-cell variant on the generalized task, one seed,
 #         20,000 steps, then the study's network trained the same way (the scorecard's
-#         reference at equal budget)
+#         reference at equal budget), then `nonneg` seed 2
 #
 # Done: the shipped generalized network (seed 0) trained on with a fresh schedule, ended by
 # the 1% rule after 15,000 more steps (docs/guides/results.md, "The generalized network
@@ -56,10 +57,22 @@ lane_a() {
   weight=$(python -c 'import json; print(json.load(open("analyses/data/activity_l1_sweep/sweep.json"))["kept"])')
   echo "$(date -u +%FT%TZ) activity L1 weight kept by the sweep: $weight"
   for variant in nonneg dale; do
-    train "generalized_${variant}_s0" --task generalized --variant "$variant" \
-      --activity-l1 "$weight" --init-seed 0 --steps 20000 --stop-improvement 0 \
-      --snapshot-every 5000 || return 1
+    nonneg_like "$variant" 0 "$weight" || return 1
   done
+  # seeds 1 and 2 of a variant that showed place fields or global remapping by the
+  # scorecard's rules (the non-negative one: place fields, at 20,000 steps)
+  nonneg_like nonneg 1 "$weight"
+}
+nonneg_like() {                 # VARIANT SEED L1_WEIGHT
+  # shipped (seed 0 as generalized_VARIANT, seed k as generalized_VARIANT_seedk) and
+  # nothing to resume: done
+  local shipped="hippo_probe/pretrained/generalized_$1$([ "$2" = 0 ] || echo "_seed$2").pt"
+  if [ -f "$shipped" ] && [ ! -f "runs/generalized_${1}_s$2/checkpoint.pt" ]; then
+    echo "$(date -u +%FT%TZ) generalized_${1}_s$2 is shipped ($shipped); skipped"
+    return 0
+  fi
+  train "generalized_${1}_s$2" --task generalized --variant "$1" --activity-l1 "$3" \
+    --init-seed "$2" --steps 20000 --stop-improvement 0 --snapshot-every 5000
 }
 finished() {                    # NAME: trained to its end and its checkpoint pruned
   [ -f "runs/$1/log.json" ] && [ ! -f "runs/$1/checkpoint.pt" ]
@@ -77,7 +90,10 @@ lane_b() {
     --steps 20000 --stop-improvement 0 --snapshot-every 5000 || return 1
   # the reference at the same budget: the study's network trained like the variants
   train generalized_faithful_s0 --task generalized --init-seed 0 --steps 20000 \
-    --stop-improvement 0 --snapshot-every 5000
+    --stop-improvement 0 --snapshot-every 5000 || return 1
+  local weight
+  weight=$(python -c 'import json; print(json.load(open("analyses/data/activity_l1_sweep/sweep.json"))["kept"])')
+  nonneg_like nonneg 2 "$weight"
 }
 
 lanes=${1:-ab}

@@ -54,7 +54,12 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
     - ``lifetime_sparseness`` (median over units) and ``population_sparseness`` (median
       over bins): Treves & Rolls (1991) ``<r>^2 / <r^2>``; ``fraction_silent``: units
       whose peak rate is 0 or below ``config.silent_fraction`` of the active units' median
-      peak.
+      peak;
+    - ``fraction_active_in_one_environment``: of the units active in at least one of two
+      environments, those silent in the other (averaged over environment pairs): the
+      on/off part of remapping (in CA1's global remapping many cells active in one room
+      are silent in the other; Leutgeb et al. 2004), which the median map correlation
+      weighs as one unit among many. Descriptive: no verdict reads it.
 
     Verdicts (``attrs``), rules fixed in :class:`~.config.ScorecardConfig`:
     ``place_fields`` if ``fraction_place_like >= config.place_fraction``;
@@ -80,7 +85,8 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
     References
     ----------
     Treves, A. & Rolls, E. T. (1991). What determines the capacity of autoassociative
-    memories in the brain? Network 2, 371-397. Leutgeb, S. et al. (2005). Independent codes
+    memories in the brain? Network 2, 371-397. Leutgeb, S. et al. (2004). Distinct ensemble codes in hippocampal areas CA3 and
+    CA1. Science 305, 1295-1298. Leutgeb, S. et al. (2005). Independent codes
     for spatial and episodic memory in hippocampal neuronal ensembles. Science 309,
     619-623 (global vs rate remapping). Muller & Kubie (1987), J. Neurosci. 7:1951-1968.
     """
@@ -132,6 +138,9 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
         r = np.where(silent[:, i] != silent[:, j], 0.0, r)
         across.append(np.where(silent[:, i] & silent[:, j], np.nan, r))
     across = np.concatenate(across)
+    # of the units active in one or both environments of a pair, those active in one only
+    switched = [(silent[:, i] != silent[:, j]).sum()
+                / max((~(silent[:, i] & silent[:, j])).sum(), 1) for i, j in pairs]
     pv = []
     for i, j in pairs:
         both = np.isfinite(flat[:, i]).all(0) & np.isfinite(flat[:, j]).all(0)
@@ -166,6 +175,8 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
         "population_sparseness": (med(population), "1",
                                   "Treves-Rolls population sparseness"),
         "fraction_silent": (float(silent.mean()), "1", "units silent in an environment"),
+        "fraction_active_in_one_environment": (
+            float(np.mean(switched)), "1", "active units silent in the other environment"),
     }
     out = xr.Dataset({k: ((), v, {"units": u, "long_name": n})
                       for k, (v, u, n) in scalars.items()})

@@ -90,3 +90,17 @@ def test_units_silent_in_most_of_an_arena_are_still_called_silent():
     card = hp.map_scorecard(quiet, bin_size=0.05)
     assert float(card.fraction_silent) == pytest.approx(18 / 48)
     assert int(card.n_units_place_like.sel(environment=1)) <= 6
+
+
+def test_units_active_in_one_arena_only_are_counted_of_the_units_active_anywhere():
+    rec = _population("place")
+    rate = rec.activity.values.copy()
+    # units 0-5 silent in environment 1, units 6-9 silent in environment 0, 10-11 in both
+    for units, env in ((range(6), 1), (range(6, 10), 0), (range(10, 12), 0),
+                       (range(10, 12), 1)):
+        rate[np.ix_(rec.environment.values == env, list(units))] = 0.0
+    quiet = rec.assign(activity=(rec.activity.dims, rate, rec.activity.attrs))
+    card = hp.map_scorecard(quiet, bin_size=0.05)
+    assert float(card.fraction_active_in_one_environment) == pytest.approx(10 / 22)
+    assert float(hp.map_scorecard(rec, bin_size=0.05)
+                 .fraction_active_in_one_environment) == 0.0

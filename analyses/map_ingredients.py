@@ -77,7 +77,8 @@ def cell_class_fractions(spikes):
 
 def most_informative_units(information, n):
     """Indices (ascending) of the ``n`` units with the most spatial information; a silent
-    unit (NaN) comes last."""
+    unit (NaN) comes last. The most informative are not the typical units: compare the
+    scorecard's medians over all active units."""
     order = np.argsort(np.nan_to_num(information, nan=-np.inf), kind="stable")[::-1]
     return np.sort(order[:n])
 
@@ -92,7 +93,7 @@ SCORE_LINES = (("error / PF after 100 s", "error_over_pf_after_100s", "{:.2f}"),
                ("silent units", "fraction_silent", "{:.2f}"),
                ("active in one arena only", "fraction_active_in_one_environment", "{:.2f}"),
                ("bits / spike (median)", "median_information_bits_per_spike", "{:.2f}"),
-               ("arena readout at 200 s", "arena_readout_accuracy_200s", "{:.2f}"),
+               ("arena readout at 200 s", "arena_readout_accuracy_200s", "{:.3f}"),
                ("place fields", "place_fields", "{}"),
                ("global remapping", "global_remapping", "{}"))
 
@@ -130,8 +131,10 @@ def scorecard_figure(maps, shown, rows):
                   for what, key, fmt in SCORE_LINES]
         text.text(0.0, 1.0, "\n".join(lines), va="top", ha="left", family="monospace",
                   fontsize=6, transform=text.transAxes)
-    fig.suptitle("each network's 16 most spatially informative units (numbered), the same "
-                 "units in two arenas; colours span each unit's range over both", fontsize=8)
+    fig.suptitle(f"each network's {N_SHOWN} most spatially informative units (numbered; "
+                 f"information of their 5 Hz Poisson spikes, both arenas pooled), the same "
+                 f"units in two arenas; colours span each unit's range over both",
+                 fontsize=8)
     return fig
 
 
@@ -193,6 +196,7 @@ def main():
     fig = scorecard_figure(maps, shown, rows)
     save_figure(fig, out / "map_ingredients.png", dpi=110)
     plt.close(fig)
+
 
 if __name__ == "__main__":
     main()

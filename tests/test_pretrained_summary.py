@@ -9,14 +9,15 @@ import pytest
 from hippo_probe.pretrained.summary import markdown, seed_spread, shipped_table
 
 
-def _ship(folder, name, seed, errors, accuracy=None, stopped=None, steps=40000):
+def _ship(folder, name, seed, errors, accuracy=None, stopped=None, steps=40000,
+          variant=None):
     stem = name if seed == 0 else f"{name}_seed{seed}"
     (folder / f"{stem}.pt").write_bytes(b"")          # only its presence is read here
     test = {f"error_{t}s_m": e for t, e in zip((50, 100, 200), errors)}
     if accuracy:
         test |= {f"accuracy_{t}s": a for t, a in zip((50, 100, 200), accuracy)}
     (folder / f"{stem}.log.json").write_text(json.dumps({
-        "config": {"steps": steps, "world": "darkness"}, "test": test,
+        "config": {"steps": steps, "world": "darkness", "variant": variant}, "test": test,
         "validation": [{"step": 250}, {"step": stopped or steps}],
         "stopped": {"step": stopped, "reason": "stop_improvement"} if stopped else None,
         "wall_time_s": 7200.0}))
@@ -41,6 +42,17 @@ def test_spread_over_seeds(tmp_path):
     assert spread.loc["localization", "error_50s_m"] == "0.200"     # one seed: no range
     text = markdown(spread)
     assert "| localization | darkness | 0 | 0.200 / 0.100 / 0.100 | — |" in text
+
+
+def test_a_variant_is_labelled_a_departure_and_the_study_s_network_is_not(tmp_path):
+    _ship(tmp_path, "generalized", 0, (0.08, 0.08, 0.09))           # a log before variants
+    _ship(tmp_path, "generalized_nonneg", 0, (0.12, 0.13, 0.15), steps=20000,
+          variant="nonneg")
+    table = shipped_table(["generalized", "generalized_nonneg"], folder=tmp_path)
+    assert table["variant"].tolist() == ["faithful", "nonneg"]
+    text = markdown(seed_spread(table))
+    assert "| generalized | darkness |" in text
+    assert "| generalized_nonneg (nonneg variant, a departure) | darkness |" in text
 
 
 def test_the_shipped_logs_are_readable():

@@ -55,11 +55,13 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
       over bins): Treves & Rolls (1991) ``<r>^2 / <r^2>``; ``fraction_silent``: units
       whose peak rate is 0 or below ``config.silent_fraction`` of the active units' median
       peak;
-    - ``fraction_active_in_one_environment``: of the units active in at least one of two
-      environments, those silent in the other (averaged over environment pairs): the
-      on/off part of remapping (in CA1's global remapping many cells active in one room
-      are silent in the other; Leutgeb et al. 2004), which the median map correlation
-      weighs as one unit among many. Descriptive: no verdict reads it.
+    - ``fraction_active_in_one_environment``: per pair of environments, of the units
+      active in at least one of the two, those silent (as in ``fraction_silent``) in the
+      other; averaged over pairs (0 when no unit is active). The on/off part of
+      remapping: in CA1's global remapping many cells active in one room are silent in
+      the other (Leutgeb et al. 2004). ``across_map_correlation`` already scores such a
+      unit 0, but as a median over all active units it barely moves when few switch;
+      this fraction reports them directly. Descriptive: no verdict reads it.
 
     Verdicts (``attrs``), rules fixed in :class:`~.config.ScorecardConfig`:
     ``place_fields`` if ``fraction_place_like >= config.place_fraction``;

@@ -9,8 +9,8 @@ generalized network with a retrained arena readout); the compass world's as
 ``generalized_compass_readout``, kept for the ablation (what the compass takes away).
 Variants that depart from the study's network, each trained 20,000 steps on the
 generalized task of the darkness world (``docs/guides/results.md``, "The map-ingredient
-scorecard"): ``generalized_nonneg`` (non-negative units, h = o * relu(tanh c), with an L1
-activity cost).
+scorecard: the study's network and its variants"): ``generalized_nonneg`` (non-negative
+units, h = o * relu(tanh c), with an L1 activity cost of weight 1).
 A network knows its world (``net.world``): record it, evaluate it and compare it with
 baselines on trials of that world. Each name may ship several training seeds:
 ``<name>.pt`` is the seed reported first (``seed=0``), ``<name>_seed<k>.pt`` seed ``k``.

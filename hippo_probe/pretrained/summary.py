@@ -35,7 +35,8 @@ def shipped_table(names=NAMES, *, folder=None):
     Returns
     -------
     pandas.DataFrame
-        Index (``network``, ``seed``); columns ``world``, ``steps``, ``budget``,
+        Index (``network``, ``seed``); columns ``world``, ``variant`` (``"faithful"``, the
+        study's network, or the departure it was trained as), ``steps``, ``budget``,
         ``stopped_early`` (the 1% rule ended it before its budget), ``hours`` (wall time of
         training) and :data:`METRICS` (NaN where the task has no arena class). A readout
         fitted as a convex problem (its log has ``fit``) has 0 steps and no budget.
@@ -64,11 +65,12 @@ def shipped_table(names=NAMES, *, folder=None):
                 (v["step"] for v in log.get("validation", [])), default=0)
             test = log.get("test") or {}
             rows.append({"network": name, "seed": seed, "world": checkpoint_world(log),
+                         "variant": log["config"].get("variant") or "faithful",
                          "steps": steps, "budget": log["config"]["steps"],
                          "stopped_early": bool(log.get("stopped")),
                          "hours": (log.get("wall_time_s") or float("nan")) / 3600,
                          **{m: test.get(m, float("nan")) for m in METRICS}})
-    columns = ["network", "seed", "world", "steps", "budget", "stopped_early", "hours",
+    columns = ["network", "seed", "world", "variant", "steps", "budget", "stopped_early", "hours",
                *METRICS]
     return pd.DataFrame(rows, columns=columns).set_index(["network", "seed"])
 
@@ -84,14 +86,14 @@ def seed_spread(table):
     Returns
     -------
     pandas.DataFrame
-        Index ``network``; columns ``world``, ``seeds`` (which are shipped) and one text
-        column per metric with a value ("—" where the task has none).
+        Index ``network``; columns ``world``, ``variant``, ``seeds`` (which are shipped)
+        and one text column per metric with a value ("—" where the task has none).
     """
     import pandas as pd
 
     out = {}
     for name, rows in table.groupby(level="network", sort=False):
-        entry = {"world": rows["world"].iloc[0],
+        entry = {"world": rows["world"].iloc[0], "variant": rows["variant"].iloc[0],
                  "seeds": ", ".join(str(s) for s in rows.index.get_level_values("seed"))}
         for metric in METRICS:
             values = rows[metric].dropna()
@@ -117,6 +119,8 @@ def markdown(spread) -> str:
     for name, r in spread.iterrows():
         errors = " / ".join(r[m] for m in METRICS[:3])
         accuracy = " / ".join(r[m] for m in METRICS[3:])
+        if r.get("variant", "faithful") != "faithful":       # a departure says so
+            name = f"{name} ({r['variant']} variant, a departure)"
         lines.append(f"| {name} | {r['world']} | {r['seeds']} | {errors} | "
                      f"{'—' if set(accuracy.split(' / ')) == {'—'} else accuracy} |")
     return "\n".join(lines)

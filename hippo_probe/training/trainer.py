@@ -582,6 +582,18 @@ def _resume(ckpt_path, config, net, opt):
     load_into(opt, ckpt["optimizer"], ckpt_path)
     log = ckpt["log"]
     log.setdefault("resumed_at", []).append(ckpt["step"])
+    # the log describes the run as it is trained now: a resume may change a setting that
+    # leaves the result's meaning intact (a stopping rule, threads, ...), and the log must
+    # not keep the first start's value of it; each resume's command line and changes are
+    # kept beside it
+    log.setdefault("precision_from_step", [[0, log["config"].get("precision", "fp32")]])
+    before = TrainConfig.from_dict(log["config"]).to_dict()
+    now = config.to_dict()
+    log.setdefault("resumes", []).append({
+        "step": ckpt["step"], "command": _command_line(),
+        "changed": {k: [before[k], now[k]] for k in config.RESUMABLE_CHANGES
+                    if before[k] != now[k]}})
+    log["config"] = now
     # a run resumed after it ended (by a stopping rule) is tested and stopped anew; the
     # old verdict and test results must not outlive the training they describe
     for key in ("stopped", "test", "test_curves", "best_validation_loss"):

@@ -491,6 +491,11 @@ def test_a_stopped_run_resumed_stops_again_or_trains_on_without_its_old_verdict(
     # the cap lifted: it trains to its budget and no longer says it stopped
     done = fit(TrainConfig(**TINY), run, cache_dir=cache, progress=False)
     assert "stopped" not in done and len(done["train"]) == 6 and "test" in done
+    # the log describes the rules the run was last trained under, and each resume
+    saved = json.loads((run / "log.json").read_text())
+    assert saved["config"]["max_hours"] is None
+    assert [r["changed"] for r in saved["resumes"]] == [{}, {"max_hours": [1e-9, None]}]
+    assert all(r["step"] == 0 and r["command"] for r in saved["resumes"])
 
 
 def test_a_run_being_trained_by_another_process_is_refused(tmp_path, monkeypatch):

@@ -92,7 +92,7 @@ SCORE_LINES = (("error / PF after 100 s", "error_over_pf_after_100s", "{:.2f}"),
                ("pop. vector corr. across", "population_vector_correlation", "{:.2f}"),
                ("silent units", "fraction_silent", "{:.2f}"),
                ("active in one arena only", "fraction_active_in_one_environment", "{:.2f}"),
-               ("bits / spike (median)", "median_information_bits_per_spike", "{:.2f}"),
+               ("bits / spike (median)", "median_information_bits_per_spike", "{:.3f}"),
                ("arena readout at 200 s", "arena_readout_accuracy_200s", "{:.3f}"),
                ("place fields", "place_fields", "{}"),
                ("global remapping", "global_remapping", "{}"))

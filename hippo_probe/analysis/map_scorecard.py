@@ -87,10 +87,16 @@ def map_scorecard(rec, *, bin_size=None, sigma=None, min_speed=None, config=None
     References
     ----------
     Treves, A. & Rolls, E. T. (1991). What determines the capacity of autoassociative
-    memories in the brain? Network 2, 371-397. Leutgeb, S. et al. (2004). Distinct ensemble codes in hippocampal areas CA3 and
-    CA1. Science 305, 1295-1298. Leutgeb, S. et al. (2005). Independent codes
-    for spatial and episodic memory in hippocampal neuronal ensembles. Science 309,
-    619-623 (global vs rate remapping). Muller & Kubie (1987), J. Neurosci. 7:1951-1968.
+    memories in the brain? Network 2, 371-397.
+
+    Leutgeb, S. et al. (2004). Distinct ensemble codes in hippocampal areas CA3 and CA1.
+    Science 305, 1295-1298.
+
+    Leutgeb, S. et al. (2005). Independent codes for spatial and episodic memory in
+    hippocampal neuronal ensembles. Science 309, 619-623 (global vs rate remapping).
+
+    Muller, R. U. & Kubie, J. L. (1987). The effects of changes in the environment on the
+    spatial firing of hippocampal complex-spike cells. J. Neurosci. 7, 1951-1968.
     """
     cfg = CFG if config is None else config
     rec = _common.check_recording(rec, ["activity", "position", "trial", "environment"],

@@ -63,14 +63,17 @@ lane_a() {
   # scorecard's rules (the non-negative one: place fields, at 20,000 steps)
   nonneg_like nonneg 1 "$weight"
 }
-nonneg_like() {                 # VARIANT SEED L1_WEIGHT
-  # shipped (seed 0 as generalized_VARIANT, seed k as generalized_VARIANT_seedk) and
-  # nothing to resume: done
-  local shipped="hippo_probe/pretrained/generalized_$1$([ "$2" = 0 ] || echo "_seed$2").pt"
-  if [ -f "$shipped" ] && [ ! -f "runs/generalized_${1}_s$2/checkpoint.pt" ]; then
-    echo "$(date -u +%FT%TZ) generalized_${1}_s$2 is shipped ($shipped); skipped"
+shipped_and_done() {            # RUN SHIPPED_FILE_STEM: exported, nothing to resume
+  if [ -f "hippo_probe/pretrained/$2.pt" ] && [ ! -f "runs/$1/checkpoint.pt" ]; then
+    echo "$(date -u +%FT%TZ) $1 is shipped as $2; skipped"
     return 0
   fi
+  return 1
+}
+nonneg_like() {                 # VARIANT SEED L1_WEIGHT
+  # shipped as generalized_VARIANT (seed 0) or generalized_VARIANT_seedk
+  shipped_and_done "generalized_${1}_s$2" \
+    "generalized_$1$([ "$2" = 0 ] || echo "_seed$2")" && return 0
   train "generalized_${1}_s$2" --task generalized --variant "$1" --activity-l1 "$3" \
     --init-seed "$2" --steps 20000 --stop-improvement 0 --snapshot-every 5000
 }
@@ -86,8 +89,10 @@ lane_b() {
       --init-seed 0 --steps 60000 --lr 3e-4 --lr-final 3e-5 --snapshot-every 2500 \
       || return 1
   fi
-  train generalized_placecells_s0 --task generalized --variant placecells --init-seed 0 \
-    --steps 20000 --stop-improvement 0 --snapshot-every 5000 || return 1
+  if shipped_and_done generalized_placecells_s0 generalized_placecells; then :; else
+    train generalized_placecells_s0 --task generalized --variant placecells --init-seed 0 \
+      --steps 20000 --stop-improvement 0 --snapshot-every 5000 || return 1
+  fi
   # the reference at the same budget: the study's network trained like the variants
   train generalized_faithful_s0 --task generalized --init-seed 0 --steps 20000 \
     --stop-improvement 0 --snapshot-every 5000 || return 1

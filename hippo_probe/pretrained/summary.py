@@ -70,8 +70,8 @@ def shipped_table(names=NAMES, *, folder=None):
                          "stopped_early": bool(log.get("stopped")),
                          "hours": (log.get("wall_time_s") or float("nan")) / 3600,
                          **{m: test.get(m, float("nan")) for m in METRICS}})
-    columns = ["network", "seed", "world", "variant", "steps", "budget", "stopped_early", "hours",
-               *METRICS]
+    columns = ["network", "seed", "world", "variant", "steps", "budget", "stopped_early",
+               "hours", *METRICS]
     return pd.DataFrame(rows, columns=columns).set_index(["network", "seed"])
 
 

@@ -1,7 +1,8 @@
 """Which ingredient makes place fields and global remapping emerge? The scorecard per network.
 
 Every network named is recorded on the same trials: ``--trials`` test trials in two fixed
-arenas that none of them trained in (the first two of the specialized task's arenas,
+arenas that none of them trained in (at least ``--min-per-arena``, default 60, in each;
+the default 140 gives 80 and 60) (the first two of the specialized task's arenas,
 started at the centre, so the generalized networks' start-relative estimate is in the
 arena frame), and scored by :func:`hippo_probe.map_scorecard` (rules fixed in
 ``ScorecardConfig``), beside its localization error against the oracular particle filter
@@ -14,8 +15,9 @@ same size for every network). The variants
 (``generalized_nonneg``, ``generalized_dale``, ``generalized_placecells``) are departures
 from the study; ``generalized`` is the study's network.
 
-    python analyses/map_ingredients.py [--networks generalized ...] [--trials 120]
-        [--pf-trials 200] [--readout-trials 4000] [--features cache/readout]
+    python analyses/map_ingredients.py [--networks generalized ...] [--trials 140]
+        [--min-per-arena 60] [--pf-trials 1000] [--readout-trials 1000]
+        [--features cache/readout]
         [--out analyses/data/map_ingredients]
 
 Writes ``<out>/scorecard.json``, ``scorecard.csv`` and ``map_ingredients.png`` (per network,
@@ -47,10 +49,16 @@ MEAN_RATE_HZ = 5.0          # the mouse session's median firing rate, rounded
 N_SHOWN = 16
 
 
-def two_arena_trials(n_trials, world):
-    """Test trials in the specialized task's first two arenas, started at the centre."""
+def two_arena_trials(n_trials, world, min_per_arena):
+    """Test trials in the specialized task's first two arenas, started at the centre (each
+    trial's arena drawn at random); refused if an arena gets fewer than ``min_per_arena``."""
     cfg = dataclasses.replace(task_config("specialized", world), n_arenas=2, classify=False)
-    return make_trials("specialized", n_trials, "test", 0, config=cfg)
+    batch = make_trials("specialized", n_trials, "test", 0, config=cfg)
+    per_arena = np.bincount(np.asarray(batch.environment), minlength=2)
+    if per_arena.min() < min_per_arena:
+        raise SystemExit(f"--trials {n_trials} gives {per_arena.tolist()} trials in the two "
+                         f"arenas; --min-per-arena asks for at least {min_per_arena} in each")
+    return batch
 
 
 def arena_readout_accuracy(name, net, n_trials, folder):
@@ -142,9 +150,11 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--networks", nargs="+", default=["generalized"],
                     help="shipped names (name@seed) or network files / run folders")
-    ap.add_argument("--trials", type=int, default=120)
-    ap.add_argument("--pf-trials", type=int, default=200)
-    ap.add_argument("--readout-trials", type=int, default=4000,
+    ap.add_argument("--trials", type=int, default=140)
+    ap.add_argument("--min-per-arena", type=int, default=60,
+                    help="trials each arena's rate maps need at least (refused if fewer)")
+    ap.add_argument("--pf-trials", type=int, default=1000)
+    ap.add_argument("--readout-trials", type=int, default=1000,
                     help="training trials of the arena readout, the same for every network "
                          "(0: no readout, for a quick look)")
     ap.add_argument("--features", default=str(ROOT / "cache" / "readout"),
@@ -153,16 +163,17 @@ def main():
     a = ap.parse_args()
     limit_threads(1)          # one process per core: BLAS too, not only torch
     out = Path(a.out)
-    rows, maps, shown, pf = [], {}, {}, {}
+    rows, maps, shown, pf, arenas = [], {}, {}, {}, {}
     for name in a.networks:
         t0 = time.time()
         net = load(name)
-        if net.world not in pf:          # one particle filter per world, for every network
+        if net.world not in pf:          # the same trials and filter for every network
+            arenas[net.world] = two_arena_trials(a.trials, net.world, a.min_per_arena)
             batch = make_trials("generalized", a.pf_trials, "test", 0,
                                 config=task_config("generalized", net.world))
             pf[net.world] = batch, pf_estimate(batch)
         variant = (net.info.get("config") or {}).get("variant", "faithful")
-        rec = hp.record(net, two_arena_trials(a.trials, net.world))
+        rec = hp.record(net, arenas[net.world])
         card = hp.map_scorecard(rec, bin_size=0.03)
         spikes = hp.poisson_spikes(rec, MEAN_RATE_HZ, seed=0)
         info = hp.spatial_information(spikes, bin_size=0.03, n_shuffles=0)
@@ -185,8 +196,10 @@ def main():
         shown[name] = most_informative_units(info.information.values, N_SHOWN)
         print(json.dumps(row), flush=True)
     out.mkdir(parents=True, exist_ok=True)
+    per_arena = np.bincount(np.asarray(next(iter(arenas.values())).environment)).tolist()
     write_text(out / "scorecard.json", json.dumps(
-        {"trials": a.trials, "pf_trials": a.pf_trials, "readout_trials": a.readout_trials,
+        {"trials": a.trials, "trials_per_arena": per_arena, "pf_trials": a.pf_trials,
+         "readout_trials": a.readout_trials,
          "rules": card.attrs["place_rule"]
          + "; " + card.attrs["remapping_rule"], "rows": rows}, indent=1), what="out")
     keys = list(rows[0])

@@ -482,7 +482,7 @@ def test_every_analysis_accepts_the_valid_session(analysis):
 @pytest.mark.parametrize("analysis", sorted(ANALYSES))
 def test_every_analysis_refuses_a_damaged_session(analysis, kind):
     bad, var = _damage(kind)
-    with pytest.raises(RecordingError) as err:
+    with pytest.raises(RecordingError):
         hp.validate(bad)
     with pytest.raises(RecordingError, match=f"`{var}`"):
         with warnings.catch_warnings():

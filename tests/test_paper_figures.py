@@ -297,11 +297,13 @@ def test_arena_probe(tmp_path):
 
 def test_map_ingredients_scores_each_network(tmp_path):
     run = subprocess.run([sys.executable, "analyses/map_ingredients.py", "--networks",
-                          "generalized", "--trials", "8", "--pf-trials", "2",
-                          "--readout-trials", "0", "--out", str(tmp_path)],
+                          "generalized", "--trials", "8", "--min-per-arena", "1",
+                          "--pf-trials", "2", "--readout-trials", "0", "--out", str(tmp_path)],
                          capture_output=True, text=True, cwd=ROOT, timeout=900)
     assert run.returncode == 0, run.stderr[-3000:]
-    (row,) = json.loads((tmp_path / "scorecard.json").read_text())["rows"]
+    card = json.loads((tmp_path / "scorecard.json").read_text())
+    assert sum(card["trials_per_arena"]) == 8
+    (row,) = card["rows"]
     assert row["variant"] == "faithful" and not row["departure_from_study"]
     fractions = [v for k, v in row.items() if k.startswith("fraction_")
                  and k != "fraction_silent"]

@@ -12,7 +12,6 @@ import datetime
 import json
 import uuid
 import warnings
-from pathlib import Path
 
 import numpy as np
 

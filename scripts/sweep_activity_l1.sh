@@ -6,6 +6,10 @@
 #
 #   python analyses/activity_l1_sweep.py runs/sweep_nonneg_l1_*
 #
+# Then the study's network trained the same way (runs/sweep_faithful): the sweep's
+# reference, which separates what non-negative units do from what their activity cost
+# does (docs/guides/results.md, "Non-negative units or their activity cost?").
+#
 # One lane (one core); start it in the background and leave it:
 #
 #   nohup bash scripts/sweep_activity_l1.sh > logs/sweep_l1.log 2>&1 &
@@ -28,3 +32,16 @@ for weight in 0 0.01 0.1 1; do
     || { echo "$(date -u +%FT%TZ) $name failed"; exit 1; }
   echo "$(date -u +%FT%TZ) done $name"
 done
+train_reference() {
+  local name=sweep_faithful
+  if [ -f "runs/$name/log.json" ] && grep -q '"test"' "runs/$name/log.json"; then
+    echo "$(date -u +%FT%TZ) $name finished before; kept"
+    return 0
+  fi
+  echo "$(date -u +%FT%TZ) start $name"
+  hippo-probe train --threads 1 --checkpoint-minutes 5 --no-progress --out "runs/$name" \
+    --task generalized --init-seed 0 --steps 4000 --stop-improvement 0 \
+    >> "logs/$name.log" 2>&1 || { echo "$(date -u +%FT%TZ) $name failed"; return 1; }
+  echo "$(date -u +%FT%TZ) done $name"
+}
+train_reference

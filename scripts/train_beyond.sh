@@ -15,12 +15,13 @@
 #
 # lane A  the L1 sweep of the `nonneg` variant (scripts/sweep_activity_l1.sh), then
 #         `nonneg` and `dale` at the weight the sweep keeps, 20,000 steps each, then
-#         `nonneg` seed 1 (it showed place fields by the scorecard's rule)
+#         `nonneg` seed 1 and `dale` seed 1 (both showed place fields by the scorecard's
+#         rule)
 # lane B  the shipped specialized network (seed 0) trained on with a fresh schedule until
 #         the 1% rule ends it (its arena accuracy was still rising at the end of its
 #         40,000 steps), then the place-cell variant on the generalized task, one seed,
 #         20,000 steps, then the study's network trained the same way (the scorecard's
-#         reference at equal budget), then `nonneg` seed 2
+#         reference at equal budget), then `nonneg` seed 2 and `dale` seed 2
 #
 # Done: the shipped generalized network (seed 0) trained on with a fresh schedule, ended by
 # the 1% rule after 15,000 more steps (docs/guides/results.md, "The generalized network
@@ -60,8 +61,9 @@ lane_a() {
     nonneg_like "$variant" 0 "$weight" || return 1
   done
   # seeds 1 and 2 of a variant that showed place fields or global remapping by the
-  # scorecard's rules (the non-negative one: place fields, at 20,000 steps)
-  nonneg_like nonneg 1 "$weight"
+  # scorecard's rules (the non-negative one and Dale's: place fields, at 20,000 steps)
+  nonneg_like nonneg 1 "$weight" || return 1
+  nonneg_like dale 1 "$weight"
 }
 shipped_and_done() {            # RUN SHIPPED_FILE_STEM: exported, nothing to resume
   if [ -f "hippo_probe/pretrained/$2.pt" ] && [ ! -f "runs/$1/checkpoint.pt" ]; then
@@ -98,7 +100,8 @@ lane_b() {
     --stop-improvement 0 --snapshot-every 5000 || return 1
   local weight
   weight=$(python -c 'import json; print(json.load(open("analyses/data/activity_l1_sweep/sweep.json"))["kept"])')
-  nonneg_like nonneg 2 "$weight"
+  nonneg_like nonneg 2 "$weight" || return 1
+  nonneg_like dale 2 "$weight"
 }
 
 lanes=${1:-ab}

@@ -10,9 +10,11 @@ generalized network with a retrained arena readout); the compass world's as
 Variants that depart from the study's network, each trained 20,000 steps on the
 generalized task of the darkness world (``docs/guides/results.md``, "The map-ingredient
 scorecard: the study's network and its variants"): ``generalized_nonneg`` (non-negative
-units, h = o * relu(tanh c), with an L1 activity cost of weight 1) and
-``generalized_placecells`` (the study's units with a population output: a softmax over
-256 Gaussian place cells, cross-entropy loss, the position decoded as their centre).
+units, h = o * relu(tanh c), with an L1 activity cost of weight 1),
+``generalized_dale`` (the same, with each unit's outgoing recurrent weights of one fixed
+sign: 80% of the units excitatory, 20% inhibitory) and ``generalized_placecells`` (the
+study's units with a population output: a softmax over 256 Gaussian place cells,
+cross-entropy loss, the position decoded as their centre).
 A network knows its world (``net.world``): record it, evaluate it and compare it with
 baselines on trials of that world. Each name may ship several training seeds:
 ``<name>.pt`` is the seed reported first (``seed=0``), ``<name>_seed<k>.pt`` seed ``k``.
@@ -25,7 +27,8 @@ from pathlib import Path
 HERE = Path(__file__).parent
 NAMES = ("localization", "generalized", "specialized", "generalized_readout",
          "localization_compass", "generalized_compass", "specialized_compass",
-         "generalized_compass_readout", "generalized_nonneg", "generalized_placecells")
+         "generalized_compass_readout", "generalized_nonneg", "generalized_dale",
+         "generalized_placecells")
 
 #: The world of a checkpoint that does not name one: every such file was made before the
 #: darkness world existed.

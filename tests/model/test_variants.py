@@ -160,6 +160,20 @@ def test_the_shipped_non_negative_variant_records_non_negative_sparse_units():
     assert np.mean(rates.max(axis=0) < 1e-3) > 0.3
 
 
+def test_the_shipped_dale_variant_keeps_its_signs_and_non_negative_units():
+    net = hp.load_pretrained("generalized_dale")
+    assert (net.config.variant, net.world) == ("dale", "darkness")
+    assert net.info["config"]["activity_l1"] == 1.0
+    sign = net.lstm.sign
+    # 80% of the units excitatory, 20% inhibitory, and every unit's outgoing weights of
+    # its own sign after 20,000 steps of training
+    assert int((sign < 0).sum()) == round(0.2 * sign.numel())
+    w = net.lstm.recurrent_weight().detach()
+    assert ((w * sign[None, :]) >= 0).all()
+    rec = hp.record(net, hp.tasks.make_trials("generalized", 2, "test", 0))
+    assert rec.activity.values.min() >= 0.0
+
+
 def test_the_shipped_place_cell_variant_decodes_positions_from_its_place_cells():
     net = hp.load_pretrained("generalized_placecells")
     assert (net.config.variant, net.world) == ("placecells", "darkness")

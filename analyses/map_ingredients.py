@@ -20,9 +20,10 @@ from the study; ``generalized`` is the study's network.
         [--features cache/readout]
         [--out analyses/data/map_ingredients]
 
-Writes ``<out>/scorecard.json``, ``scorecard.csv`` and ``map_ingredients.png`` (per network,
-rate maps of its 16 most spatially informative units in the two arenas, and its
-scorecard beside them).
+Writes ``<out>/scorecard.json``, ``scorecard.csv`` (every measure), ``scorecard.md`` (the
+headline measures as a Markdown table) and ``map_ingredients.png`` (per network, rate maps
+of its 16 most spatially informative units in the two arenas, and its scorecard beside
+them).
 """
 
 import argparse
@@ -106,6 +107,42 @@ SCORE_LINES = (("error / PF after 100 s", "error_over_pf_after_100s", "{:.2f}"),
                ("global remapping", "global_remapping", "{}"))
 
 
+#: The columns of ``scorecard.md``: (header, key, format).
+TABLE_COLUMNS = (("steps", "steps", "{:,}"),
+                 ("error / PF after 100 s", "error_over_pf_after_100s", "{:.2f}"),
+                 ("place-like", "fraction_place_like", "{:.2f}"),
+                 ("field area (m²)", "median_field_area", "{:.3f}"),
+                 ("map corr. within / across", ("within_map_correlation",
+                                                "across_map_correlation"), "{:.2f}"),
+                 ("PV corr. across", "population_vector_correlation", "{:.2f}"),
+                 ("silent", "fraction_silent", "{:.2f}"),
+                 ("one arena", "fraction_active_in_one_environment", "{:.3f}"),
+                 ("bits / spike", "median_information_bits_per_spike", "{:.3f}"),
+                 ("TwoNN dim.", "twonn_dimension", "{:.1f}"),
+                 ("readout 200 s", "arena_readout_accuracy_200s", "{:.3f}"),
+                 ("place fields", "place_fields", "{}"),
+                 ("global remapping", "global_remapping", "{}"))
+
+
+def markdown_table(rows):
+    """The scorecard's headline measures, one row per network, as a Markdown table."""
+    def cell(row, key, fmt):
+        keys = key if isinstance(key, tuple) else (key,)
+        values = [row[k] for k in keys]
+        if any(v is None for v in values):
+            return "—"
+        return " / ".join("yes" if v is True else "no" if v is False else fmt.format(v)
+                          for v in values)
+
+    lines = ["| network (variant) | " + " | ".join(h for h, _, _ in TABLE_COLUMNS) + " |",
+             "|---" * (len(TABLE_COLUMNS) + 1) + "|"]
+    for row in rows:
+        name = Path(row["network"]).name if Path(row["network"]).exists() else row["network"]
+        lines.append(f"| `{name}` ({row['variant']}) | "
+                     + " | ".join(cell(row, k, f) for _, k, f in TABLE_COLUMNS) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def scorecard_figure(maps, shown, rows):
     """Per network two rows of rate maps (its ``N_SHOWN`` most informative units, the
     same units in arena 0 and arena 1, each unit's colours spanning its range over both
@@ -172,7 +209,8 @@ def main():
             batch = make_trials("generalized", a.pf_trials, "test", 0,
                                 config=task_config("generalized", net.world))
             pf[net.world] = batch, pf_estimate(batch)
-        variant = (net.info.get("config") or {}).get("variant", "faithful")
+        config = net.info.get("config") or {}
+        variant = config.get("variant", "faithful")
         rec = hp.record(net, arenas[net.world])
         card = hp.map_scorecard(rec, bin_size=0.03)
         spikes = hp.poisson_spikes(rec, MEAN_RATE_HZ, seed=0)
@@ -180,6 +218,7 @@ def main():
         dim = hp.intrinsic_dimension(rec, estimators="TwoNN")
         row = {"network": name, "variant": variant,
                "departure_from_study": variant != "faithful",
+               "steps": net.info.get("steps_done") or config.get("steps"),
                "error_over_pf_after_100s":
                    errors(net, *pf[net.world])["ratio_to_pf_t_gt_100s"],
                **{k: float(card[k]) for k in card.data_vars if card[k].ndim == 0},
@@ -206,6 +245,7 @@ def main():
     write_text(out / "scorecard.csv", "\n".join(
         [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]) + "\n",
         what="out")
+    write_text(out / "scorecard.md", markdown_table(rows), what="out")
     fig = scorecard_figure(maps, shown, rows)
     save_figure(fig, out / "map_ingredients.png", dpi=110)
     plt.close(fig)

@@ -310,6 +310,11 @@ def test_map_ingredients_scores_each_network(tmp_path):
     assert {"fraction_place", "fraction_grid", "fraction_head_direction"} <= set(row)
     assert all(0 <= v <= 1 for v in fractions)
     assert row["error_over_pf_after_100s"] > 0 and row["arena_readout_accuracy_200s"] is None
+    assert row["steps"] == 40000
+    # the Markdown table: a header, its rule and the network's row, yes/no verdicts
+    table = (tmp_path / "scorecard.md").read_text().splitlines()
+    assert len(table) == 3 and table[2].startswith("| `generalized` (faithful) | 40,000 |")
+    assert table[2].endswith("| no | no |")
     assert (tmp_path / "map_ingredients.png").stat().st_size > 1000
 
 

@@ -92,54 +92,40 @@ def most_informative_units(information, n):
     return np.sort(order[:n])
 
 
-#: The scorecard lines printed beside each network's maps: (label, key, format).
-SCORE_LINES = (("error / PF after 100 s", "error_over_pf_after_100s", "{:.2f}"),
+#: The scorecard's headline measures, printed beside each network's maps and as the
+#: columns of ``scorecard.md``: (label, key, format).
+SCORE_LINES = (("steps", "steps", "{:,}"),
+               ("error / PF after 100 s", "error_over_pf_after_100s", "{:.2f}"),
                ("place-like units", "fraction_place_like", "{:.2f}"),
-               ("median field area", "median_field_area", "{:.3f}"),
+               ("median field area (m²)", "median_field_area", "{:.3f}"),
                ("map corr. within", "within_map_correlation", "{:.2f}"),
                ("map corr. across", "across_map_correlation", "{:.2f}"),
                ("pop. vector corr. across", "population_vector_correlation", "{:.2f}"),
                ("silent units", "fraction_silent", "{:.2f}"),
-               ("active in one arena only", "fraction_active_in_one_environment", "{:.2f}"),
+               ("active in one arena only", "fraction_active_in_one_environment", "{:.3f}"),
                ("bits / spike (median)", "median_information_bits_per_spike", "{:.3f}"),
+               ("TwoNN dimension", "twonn_dimension", "{:.1f}"),
                ("arena readout at 200 s", "arena_readout_accuracy_200s", "{:.3f}"),
                ("place fields", "place_fields", "{}"),
                ("global remapping", "global_remapping", "{}"))
 
 
-#: The columns of ``scorecard.md``: (header, key, format).
-TABLE_COLUMNS = (("steps", "steps", "{:,}"),
-                 ("error / PF after 100 s", "error_over_pf_after_100s", "{:.2f}"),
-                 ("place-like", "fraction_place_like", "{:.2f}"),
-                 ("field area (m²)", "median_field_area", "{:.3f}"),
-                 ("map corr. within / across", ("within_map_correlation",
-                                                "across_map_correlation"), "{:.2f}"),
-                 ("PV corr. across", "population_vector_correlation", "{:.2f}"),
-                 ("silent", "fraction_silent", "{:.2f}"),
-                 ("one arena", "fraction_active_in_one_environment", "{:.3f}"),
-                 ("bits / spike", "median_information_bits_per_spike", "{:.3f}"),
-                 ("TwoNN dim.", "twonn_dimension", "{:.1f}"),
-                 ("readout 200 s", "arena_readout_accuracy_200s", "{:.3f}"),
-                 ("place fields", "place_fields", "{}"),
-                 ("global remapping", "global_remapping", "{}"))
+def score_text(row, key, fmt):
+    """One measure of a scorecard row as text: "—" if not measured, verdicts as yes/no."""
+    value = row[key]
+    if value is None:
+        return "—"
+    return "yes" if value is True else "no" if value is False else fmt.format(value)
 
 
 def markdown_table(rows):
     """The scorecard's headline measures, one row per network, as a Markdown table."""
-    def cell(row, key, fmt):
-        keys = key if isinstance(key, tuple) else (key,)
-        values = [row[k] for k in keys]
-        if any(v is None for v in values):
-            return "—"
-        return " / ".join("yes" if v is True else "no" if v is False else fmt.format(v)
-                          for v in values)
-
-    lines = ["| network (variant) | " + " | ".join(h for h, _, _ in TABLE_COLUMNS) + " |",
-             "|---" * (len(TABLE_COLUMNS) + 1) + "|"]
+    lines = ["| network (variant) | " + " | ".join(h for h, _, _ in SCORE_LINES) + " |",
+             "|---" * (len(SCORE_LINES) + 1) + "|"]
     for row in rows:
         name = Path(row["network"]).name if Path(row["network"]).exists() else row["network"]
         lines.append(f"| `{name}` ({row['variant']}) | "
-                     + " | ".join(cell(row, k, f) for _, k, f in TABLE_COLUMNS) + " |")
+                     + " | ".join(score_text(row, k, f) for _, k, f in SCORE_LINES) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -172,7 +158,7 @@ def scorecard_figure(maps, shown, rows):
         text.axis("off")
         lines = [f"{label} ({row['variant']}"
                  + (", a departure)" if row["departure_from_study"] else ", the study's)")]
-        lines += [f"{what:<25}" + ("—" if row[key] is None else fmt.format(row[key]))
+        lines += [f"{what:<25}" + score_text(row, key, fmt)
                   for what, key, fmt in SCORE_LINES]
         text.text(0.0, 1.0, "\n".join(lines), va="top", ha="left", family="monospace",
                   fontsize=6, transform=text.transAxes)

@@ -314,6 +314,7 @@ def test_map_ingredients_scores_each_network(tmp_path):
     # the Markdown table: a header, its rule and the network's row, yes/no verdicts
     table = (tmp_path / "scorecard.md").read_text().splitlines()
     assert len(table) == 3 and table[2].startswith("| `generalized` (faithful) | 40,000 |")
+    assert table[0].count("|") == table[2].count("|")
     assert table[2].endswith("| no | no |")
     assert (tmp_path / "map_ingredients.png").stat().st_size > 1000
 

@@ -35,7 +35,7 @@ recordings = {name: hp.record(hp.load_pretrained(name), batch)
 # The scorecard of each, side by side. Most of the non-negative units are silent; the
 # active ones have compact fields, so the place-field verdict flips, but their maps
 # correlate about as much across the two arenas as within one: no global remapping.
-# (40 trials make noisy maps; the scorecard of record uses 120, see the results guide.)
+# (40 trials make noisy maps; the scorecard of record uses 140, see the results guide.)
 # Units silent in an arena have no map correlation there, and units silent in both no
 # spatial information: the warnings say which.
 cards = {name: hp.map_scorecard(rec, bin_size=0.03) for name, rec in recordings.items()}

@@ -111,9 +111,10 @@ SCORE_LINES = (("steps", "steps", "{:,}"),
 
 
 def score_text(row, key, fmt):
-    """One measure of a scorecard row as text: "—" if not measured, verdicts as yes/no."""
+    """One measure of a scorecard row as text: "—" if not measured or undefined (no unit
+    with a field has no median field area), verdicts as yes/no."""
     value = row[key]
-    if value is None:
+    if value is None or (isinstance(value, float) and np.isnan(value)):
         return "—"
     return "yes" if value is True else "no" if value is False else fmt.format(value)
 
@@ -133,7 +134,7 @@ def scorecard_figure(maps, shown, rows):
     """Per network two rows of rate maps (its ``N_SHOWN`` most informative units, the
     same units in arena 0 and arena 1, each unit's colours spanning its range over both
     arenas) and its scorecard beside them."""
-    fig = plt.figure(figsize=(N_SHOWN * 0.75 + 3.2, 1.6 * len(maps) + 0.5),
+    fig = plt.figure(figsize=(N_SHOWN * 0.75 + 3.2, 1.9 * len(maps) + 0.5),
                      layout="constrained")
     grid = fig.add_gridspec(2 * len(maps), N_SHOWN + 1,
                             width_ratios=[1] * N_SHOWN + [4.2])

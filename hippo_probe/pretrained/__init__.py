@@ -14,7 +14,8 @@ units, h = o * relu(tanh c), with an L1 activity cost of weight 1),
 ``generalized_dale`` (the same, with each unit's outgoing recurrent weights of one fixed
 sign: 80% of the units excitatory, 20% inhibitory) and ``generalized_placecells`` (the
 study's units with a population output: a softmax over 256 Gaussian place cells,
-cross-entropy loss, the position decoded as their centre).
+cross-entropy loss, the position decoded as their centre); their reference at the same
+budget, ``generalized_faithful``, is the study's network trained the same 20,000 steps.
 A network knows its world (``net.world``): record it, evaluate it and compare it with
 baselines on trials of that world. Each name may ship several training seeds:
 ``<name>.pt`` is the seed reported first (``seed=0``), ``<name>_seed<k>.pt`` seed ``k``.
@@ -27,8 +28,8 @@ from pathlib import Path
 HERE = Path(__file__).parent
 NAMES = ("localization", "generalized", "specialized", "generalized_readout",
          "localization_compass", "generalized_compass", "specialized_compass",
-         "generalized_compass_readout", "generalized_nonneg", "generalized_dale",
-         "generalized_placecells")
+         "generalized_compass_readout", "generalized_faithful", "generalized_nonneg",
+         "generalized_dale", "generalized_placecells")
 
 #: The world of a checkpoint that does not name one: every such file was made before the
 #: darkness world existed.

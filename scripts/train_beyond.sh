@@ -96,8 +96,10 @@ lane_b() {
       --steps 20000 --stop-improvement 0 --snapshot-every 5000 || return 1
   fi
   # the reference at the same budget: the study's network trained like the variants
-  train generalized_faithful_s0 --task generalized --init-seed 0 --steps 20000 \
-    --stop-improvement 0 --snapshot-every 5000 || return 1
+  if shipped_and_done generalized_faithful_s0 generalized_faithful; then :; else
+    train generalized_faithful_s0 --task generalized --init-seed 0 --steps 20000 \
+      --stop-improvement 0 --snapshot-every 5000 || return 1
+  fi
   local weight
   weight=$(python -c 'import json; print(json.load(open("analyses/data/activity_l1_sweep/sweep.json"))["kept"])')
   nonneg_like nonneg 2 "$weight" || return 1

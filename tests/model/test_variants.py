@@ -160,6 +160,19 @@ def test_the_shipped_non_negative_variant_records_non_negative_sparse_units():
     assert np.mean(rates.max(axis=0) < 1e-3) > 0.3
 
 
+def test_the_variants_reference_is_the_studys_network_at_their_budget():
+    from hippo_probe.pretrained.summary import shipped_table
+
+    table = shipped_table(["generalized_faithful", "generalized_nonneg", "generalized_dale",
+                           "generalized_placecells"])
+    assert table.loc[("generalized_faithful", 0), "variant"] == "faithful"
+    # one budget for the reference and every variant, trained to its end
+    assert set(table["budget"]) == {20000} and set(table["steps"]) == {20000}
+    assert not table["stopped_early"].any()
+    net = hp.load_pretrained("generalized_faithful")
+    assert (net.config.variant, net.world) == ("faithful", "darkness")
+
+
 def test_the_shipped_dale_variant_keeps_its_signs_and_non_negative_units():
     net = hp.load_pretrained("generalized_dale")
     assert (net.config.variant, net.world) == ("dale", "darkness")

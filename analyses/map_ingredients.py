@@ -1,10 +1,10 @@
 """Which ingredient makes place fields and global remapping emerge? The scorecard per network.
 
 Every network named is recorded on the same trials: ``--trials`` test trials in two fixed
-arenas that none of them trained in (at least ``--min-per-arena``, default 60, in each;
-the default 140 gives 80 and 60) (the first two of the specialized task's arenas,
+arenas that none of them trained in (the first two of the specialized task's arenas,
 started at the centre, so the generalized networks' start-relative estimate is in the
-arena frame), and scored by :func:`hippo_probe.map_scorecard` (rules fixed in
+arena frame; at least ``--min-per-arena`` trials in each, the default 140 giving 80 and
+60), and scored by :func:`hippo_probe.map_scorecard` (rules fixed in
 ``ScorecardConfig``), beside its localization error against the oracular particle filter
 on ``--pf-trials`` generalized test trials, the median Skaggs information of its units as
 spikes (``hp.poisson_spikes`` at 5 Hz) and the fraction of them in each class of
@@ -13,7 +13,8 @@ the study's arena readout (Fig. 3F: a linear readout of the units fitted to conv
 on ``--readout-trials`` specialized-task trials, :mod:`hippo_probe.paper.readout`, the
 same size for every network). The variants
 (``generalized_nonneg``, ``generalized_dale``, ``generalized_placecells``) are departures
-from the study; ``generalized`` is the study's network.
+from the study; ``generalized`` is the study's network and ``generalized_faithful`` the
+same trained the variants' 20,000 steps.
 
     python analyses/map_ingredients.py [--networks generalized ...] [--trials 140]
         [--min-per-arena 60] [--pf-trials 1000] [--readout-trials 1000]

@@ -43,39 +43,86 @@ def _points(data, *, max_points, transient, seed):
     return arr[chosen], chosen, np.zeros(len(chosen), np.int64), info
 
 
+#: The bin guess reads a squared distance's exponent and top 6 mantissa bits: 64 cells
+#: per octave, each far narrower than a bin (the default 50 bins per decade of r are 0.13
+#: octave of r² wide), so the guess is the bin or the one below it.
+_GUESS_SHIFT = 46
+
+
+def squared_thresholds(edges) -> np.ndarray:
+    """For each edge ``e``, the smallest double ``t`` with ``sqrt(t) >= e``.
+
+    ``edges[k] <= sqrt(s)`` holds exactly when ``s >= t[k]`` (the square root is
+    correctly rounded, hence monotone), so a squared distance is binned without its square
+    root, in the bins ``searchsorted(edges, sqrt(s), side="right")`` gives. Edges <= 0
+    get ``-inf``: every distance reaches them.
+    """
+    edges = np.asarray(edges, np.float64)
+    with np.errstate(over="ignore"):            # an overflowing square is walked down
+        t = np.where(edges > 0, edges * edges, -np.inf)
+    for k in np.flatnonzero(edges > 0):
+        e = edges[k]
+        while np.sqrt(t[k]) < e:                     # e * e rounded down
+            t[k] = np.nextafter(t[k], np.inf)
+        while t[k] > 0 and np.sqrt(np.nextafter(t[k], -np.inf)) >= e:   # rounded up
+            t[k] = np.nextafter(t[k], -np.inf)
+    return t
+
+
+def bin_guesses(thresholds) -> tuple[np.ndarray, int]:
+    """A table of first guesses of the bin, indexed by a squared distance's bit pattern.
+
+    The bits of a non-negative double, read as an integer, grow with it; cell ``c`` of
+    the table holds the number of thresholds at or below the smallest double whose bits
+    shifted right by ``_GUESS_SHIFT`` are ``c + offset``: a lower bound of the bin of
+    every double of the cell. Returns ``(table, offset)``.
+    """
+    finite = thresholds[np.isfinite(thresholds) & (thresholds > 0)]
+    if finite.size == 0:
+        return np.zeros(1, np.int64), 0
+    lo, hi = (int(np.float64(v).view(np.int64)) >> _GUESS_SHIFT
+              for v in (finite[0], finite[-1]))
+    cells = np.arange(lo, hi + 1, dtype=np.int64)
+    starts = (cells << _GUESS_SHIFT).view(np.float64)
+    return np.searchsorted(thresholds, starts, side="right").astype(np.int64), lo
+
+
 @numba.njit(cache=True)
-def _count_rows(dots, sq, i0, order, trial, theiler, edges, hist):
+def _count_rows(dots, sq, i0, order, trial, theiler, thresholds, guesses, offset, hist):
     """Add the pairs (i, j > i) of rows ``i0 ..`` into ``hist`` (bin k: ``k`` edges <= d);
     returns how many were counted.
 
     ``dots`` holds the rows' dot products with the points from ``i0`` on (one BLAS
     product; column ``c`` is point ``i0 + c``: the pairs j > i need no earlier point), and
     the squared distance is formed as ``(|x_i|^2 + |x_j|^2) - 2 x_i.x_j``, the operations and
-    their order those of the array expression it replaced, without fast-math: the counts
-    are bit for bit the same, from one pass instead of five temporary arrays.
+    their order those of the array expression it replaced, without fast-math. It is
+    binned against the edges' squared thresholds (:func:`squared_thresholds`), so the
+    counts are bit for bit those of ``searchsorted(edges, sqrt(s))``, with no square root
+    or logarithm per pair: the bin is guessed from the bits of ``s``
+    (:func:`bin_guesses`, a lower bound) and raised against the thresholds themselves.
     """
     rows, m = dots.shape[0], i0 + dots.shape[1]
-    n_edges = edges.shape[0]
-    # the bin is guessed from log d (the edges are log-spaced) and then corrected against
-    # the edges themselves, so it is exactly searchsorted's, whatever the edges
-    log_first = np.log(edges[0])
-    span = np.log(edges[-1]) - log_first
-    per_log = (n_edges - 1) / span if n_edges > 1 and span > 0 else 0.0
+    n_edges = thresholds.shape[0]
+    last = guesses.shape[0] - 1
+    value = np.empty(1, np.float64)
+    bits = value.view(np.int64)               # the same 8 bytes, read as an integer
     pairs = 0
     for r in range(rows):
         i = i0 + r
         for j in range(i + 1, m):
             if trial[i] == trial[j] and abs(order[i] - order[j]) < theiler:
                 continue                      # inside the Theiler window
-            d = np.sqrt(max(sq[i] + sq[j] - 2.0 * dots[r, j - i0], 0.0))
-            guess = (np.log(d) - log_first) * per_log + 1.0 if d > 0 else 0.0
-            if not guess >= 0.0:              # NaN from edges <= 0: walk from the start
-                guess = 0.0
-            k = int(min(guess, float(n_edges)))
-            while k < n_edges and edges[k] <= d:
+            s = sq[i] + sq[j] - 2.0 * dots[r, j - i0]
+            k = 0
+            if s > 0.0:
+                value[0] = s
+                cell = (bits[0] >> _GUESS_SHIFT) - offset
+                if cell >= 0:                 # below the table: below every threshold > 0
+                    k = guesses[min(cell, last)]
+            else:
+                s = 0.0
+            while k < n_edges and thresholds[k] <= s:   # the guess is never too high
                 k += 1
-            while k > 0 and edges[k - 1] > d:
-                k -= 1
             hist[k] += 1
             pairs += 1
     return pairs
@@ -115,12 +162,14 @@ def pair_counts(points, order, trial, theiler, edges, block=None):
     if edges.ndim != 1 or edges.size == 0 or (np.diff(edges) <= 0).any():
         raise ValueError(f"`edges` must be a non-empty increasing 1-D array; got "
                          f"{edges.size} values")
+    thresholds = squared_thresholds(edges)
+    guesses, offset = bin_guesses(thresholds)
     hist = np.zeros(len(edges) + 1, np.int64)
     n_pairs = 0
     for i0 in range(0, m, block):
         i1 = min(m, i0 + block)
         n_pairs += _count_rows(block_products(points, i0, i1), sq, i0, order, trial,
-                               float(theiler), edges, hist)
+                               float(theiler), thresholds, guesses, offset, hist)
     return np.cumsum(hist)[:-1], n_pairs
 
 

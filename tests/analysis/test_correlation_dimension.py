@@ -154,3 +154,21 @@ def test_pair_counts_match_searchsorted_for_any_increasing_edges(edges):
     np.testing.assert_array_equal(ours[0], theirs[0])
     with pytest.raises(ValueError, match="`edges` must be a non-empty increasing"):
         pair_counts(x, order, trial, theiler=0, edges=np.array([]))
+
+
+def test_squared_thresholds_bin_exactly_as_the_square_root_would():
+    """``s >= t[k]`` exactly when ``edges[k] <= sqrt(s)``: at every threshold and its
+    neighbouring doubles, for edges from subnormal squares to overflowing ones."""
+    from hippo_probe.analysis.correlation_dimension import squared_thresholds
+
+    rng = np.random.default_rng(6)
+    edges = np.sort(np.r_[0.0, 1e-170, 1e-160, 10.0 ** rng.uniform(-8, 3, 500), 1e155])
+    t = squared_thresholds(edges)
+    finite = t[np.isfinite(t)]
+    with np.errstate(over="ignore"):
+        squares = edges * edges
+    s = np.r_[0.0, finite, np.nextafter(finite, np.inf), np.nextafter(finite, -np.inf),
+              squares[np.isfinite(squares)], np.inf]
+    s = s[s >= 0]
+    np.testing.assert_array_equal(s[:, None] >= t[None, :],
+                                  edges[None, :] <= np.sqrt(s)[:, None])

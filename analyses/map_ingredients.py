@@ -21,10 +21,13 @@ same trained the variants' 20,000 steps.
         [--features cache/readout]
         [--out analyses/data/map_ingredients]
 
+A network named at several seeds (``generalized_nonneg@1``, ...) gets each seed's row and
+a summary across them: each measure's mean and range, each verdict's count of seeds.
+
 Writes ``<out>/scorecard.json``, ``scorecard.csv`` (every measure), ``scorecard.md`` (the
-headline measures as a Markdown table) and ``map_ingredients.png`` (per network, rate maps
-of its 16 most spatially informative units in the two arenas, and its scorecard beside
-them).
+headline measures as a Markdown table, and across seeds where given) and
+``map_ingredients.png`` (per network, its first seed's rate maps of its 16 most spatially
+informative units in the two arenas, and its scorecard beside them).
 """
 
 import argparse
@@ -131,6 +134,63 @@ def markdown_table(rows):
     return "\n".join(lines) + "\n"
 
 
+def network_of(name):
+    """The network a scorecard row is a seed of: ``name@k`` -> ``name``; a file or run
+    folder is its own network."""
+    return name if Path(name).exists() else name.partition("@")[0]
+
+
+def across_seeds(rows):
+    """Per network given at two or more seeds: each headline measure's mean, minimum and
+    maximum over the seeds (NaN and unmeasured values left out), and each verdict's
+    count of seeds that reach it."""
+    groups = {}
+    for row in rows:
+        groups.setdefault(network_of(row["network"]), []).append(row)
+    out = {}
+    for network, group in groups.items():
+        if len(group) < 2:
+            continue
+        summary = {"seeds": [r["network"] for r in group]}
+        for _, key, _ in SCORE_LINES:
+            values = [r[key] for r in group]
+            if all(isinstance(v, bool) for v in values):
+                summary[key] = {"yes": sum(values), "of": len(values)}
+                continue
+            numbers = [v for v in values if v is not None and np.isfinite(v)]
+            if not numbers:
+                summary[key] = None
+                continue
+            mean = float(np.mean(numbers))
+            if all(isinstance(v, int) for v in numbers) and mean.is_integer():
+                mean = int(mean)                # steps stay a count
+            summary[key] = {"mean": mean, "min": min(numbers), "max": max(numbers),
+                            "n": len(numbers)}
+        out[network] = summary
+    return out
+
+
+def seeds_table(summary):
+    """:func:`across_seeds` as a Markdown table: mean (min–max) over the seeds, verdicts
+    as the number of seeds that reach them."""
+    lines = ["| network | seeds | " + " | ".join(h for h, _, _ in SCORE_LINES) + " |",
+             "|---" * (len(SCORE_LINES) + 2) + "|"]
+    for network, by_key in summary.items():
+        cells = []
+        for _, key, fmt in SCORE_LINES:
+            v = by_key[key]
+            if v is None:
+                cells.append("—")
+            elif "yes" in v:
+                cells.append(f"{v['yes']} of {v['of']}")
+            else:
+                cells.append(fmt.format(v["mean"]) + (
+                    "" if v["min"] == v["max"] else
+                    f" ({fmt.format(v['min'])}–{fmt.format(v['max'])})"))
+        lines.append(f"| `{network}` | {len(by_key['seeds'])} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def scorecard_figure(maps, shown, rows):
     """Per network two rows of rate maps (its ``N_SHOWN`` most informative units, the
     same units in arena 0 and arena 1, each unit's colours spanning its range over both
@@ -224,17 +284,27 @@ def main():
         print(json.dumps(row), flush=True)
     out.mkdir(parents=True, exist_ok=True)
     per_arena = np.bincount(np.asarray(next(iter(arenas.values())).environment)).tolist()
+    seeds = across_seeds(rows)
     write_text(out / "scorecard.json", json.dumps(
         {"trials": a.trials, "trials_per_arena": per_arena, "pf_trials": a.pf_trials,
          "readout_trials": a.readout_trials,
          "rules": card.attrs["place_rule"]
-         + "; " + card.attrs["remapping_rule"], "rows": rows}, indent=1), what="out")
+         + "; " + card.attrs["remapping_rule"], "rows": rows, "across_seeds": seeds},
+        indent=1), what="out")
     keys = list(rows[0])
     write_text(out / "scorecard.csv", "\n".join(
         [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]) + "\n",
         what="out")
-    write_text(out / "scorecard.md", markdown_table(rows), what="out")
-    fig = scorecard_figure(maps, shown, rows)
+    write_text(out / "scorecard.md", markdown_table(rows) + (
+        "\nAcross seeds: mean (min–max); verdicts, the seeds that reach them.\n\n"
+        + seeds_table(seeds) if seeds else ""), what="out")
+    # one seed of each network in the figure (its first given): the maps of every seed
+    # would not fit a page
+    first = {}
+    for row in rows:
+        first.setdefault(network_of(row["network"]), row)
+    drawn = [row["network"] for row in first.values()]
+    fig = scorecard_figure({n: maps[n] for n in drawn}, shown, list(first.values()))
     save_figure(fig, out / "map_ingredients.png", dpi=110)
     plt.close(fig)
 

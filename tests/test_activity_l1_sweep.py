@@ -1,22 +1,14 @@
 """The L1 sweep's summary (analyses/activity_l1_sweep.py): the weight-choosing rule, and
 the script end to end on two tiny runs."""
 
-import importlib.util
 import json
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 @pytest.fixture(scope="module")
-def sweep():
-    spec = importlib.util.spec_from_file_location(
-        "activity_l1_sweep", ROOT / "analyses" / "activity_l1_sweep.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def sweep(analysis_script):
+    return analysis_script("activity_l1_sweep")
 
 
 def test_the_largest_weight_within_the_tolerance_is_kept(sweep):

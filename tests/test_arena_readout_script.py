@@ -1,29 +1,16 @@
 """analyses/arena_readout.py: a later run reuses the variant's time constant only when it
 was chosen on the same features, size, C and candidates."""
 
-import importlib.util
-import sys
 from dataclasses import replace
-from pathlib import Path
 
 import pytest
 
 from hippo_probe.paper import readout as R
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 @pytest.fixture(scope="module")
-def script():
-    sys.path.insert(0, str(ROOT / "analyses"))
-    try:
-        spec = importlib.util.spec_from_file_location(
-            "arena_readout", ROOT / "analyses" / "arena_readout.py")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    finally:
-        sys.path.remove(str(ROOT / "analyses"))
-    return module
+def script(analysis_script):
+    return analysis_script("arena_readout")
 
 
 def earlier(taus=R.READOUT.taus, size=4000, c=1.0, features="net-abc"):

@@ -1,26 +1,13 @@
 """analyses/map_ingredients.py: a network named at several seeds is summarised across them."""
 
-import importlib.util
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 @pytest.fixture(scope="module")
-def script():
-    sys.path.insert(0, str(ROOT / "analyses"))
-    try:
-        spec = importlib.util.spec_from_file_location(
-            "map_ingredients", ROOT / "analyses" / "map_ingredients.py")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    finally:
-        sys.path.remove(str(ROOT / "analyses"))
-    return module
+def script(analysis_script):
+    return analysis_script("map_ingredients")
 
 
 def row(script, network, place, ratio, readout, fields):

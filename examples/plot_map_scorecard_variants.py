@@ -50,15 +50,17 @@ table
 
 # %%
 # What the numbers summarize: the variant's eight most spatially informative units (by
-# the information of their activity, both arenas pooled), in arena 0 (top) and arena 1
-# (bottom), each unit divided by its peak over both arenas so that its two maps compare.
+# the information of their activity in each arena, averaged over the two), in arena 0
+# (top) and arena 1 (bottom), each unit divided by its peak over both arenas so that its
+# two maps compare.
 # Several fire in one arena only and others fire in different places in the two, as
 # cells do in global remapping; but they are the most informative units, not the typical
 # ones: across all active units, the scorecard's
 # ``fraction_active_in_one_environment`` is small and the median map correlation between
 # the arenas is no lower than within one.
 nonneg = recordings["generalized_nonneg"]
-information = hp.spatial_information(nonneg, bin_size=0.03).information.fillna(-1)
+information = hp.spatial_information(nonneg, bin_size=0.03, by="environment").information
+information = information.mean("environment").fillna(-1)
 best = np.sort(information.unit.values[np.argsort(information.values)[::-1][:8]])
 
 

@@ -7,11 +7,15 @@ A trained network is recorded like an electrophysiology session, a real mouse se
 """
 
 # %%
-# Record the generalized network on 40 test trials (novel arenas of radius 0.33 m).
+# Record the generalized network on 40 test trials in one arena it never trained in
+# (a fixed random polygon; the task's trials are otherwise each in a new arena, and maps
+# pooled over arenas would mix their shapes: ``by="environment"`` separates them).
 import hippo_probe as hp
 
 net = hp.load_pretrained("generalized")
-batch = hp.tasks.make_trials("generalized", n_trials=40, split="test", seed=0)
+one_arena = hp.tasks.task_config("generalized", arenas="fixed", n_arenas=1)
+batch = hp.tasks.make_trials("generalized", n_trials=40, split="test", seed=0,
+                             config=one_arena)
 network = hp.record(net, batch)
 network
 
@@ -25,7 +29,7 @@ print(mouse.sizes["unit"], "units,", float(mouse.time[-1] - mouse.time[0]) / 60,
 # %%
 # The same call on both: occupancy-normalized maps, smoothed by normalized convolution.
 # The maps are labelled xarray objects; ``.hp.plot()`` draws a grid of them. The
-# network's units, in their novel arenas, are smooth gradients ...
+# network's units, in a novel arena, are smooth gradients ...
 net_maps = hp.ratemaps(network, bin_size=0.04)
 net_maps.isel(unit=slice(0, 8)).hp.plot()
 
@@ -36,9 +40,10 @@ mouse_maps.isel(unit=slice(0, 8)).hp.plot()
 # sphinx_gallery_thumbnail_number = 2
 
 # %%
-# Skaggs information of each unit. It needs a non-negative rate: the network's signed
-# units are shifted by their minimum, as the result's attrs say.
-net_info = hp.spatial_information(net_maps)
+# Skaggs information of each unit, from the recordings: on unsmoothed maps (its
+# default; smoothing spreads a field and lowers it). It needs a non-negative rate: the
+# network's signed units are shifted by their minimum, as the result's attrs say.
+net_info = hp.spatial_information(network, bin_size=0.04)
 print(net_info.attrs["rate_offset"])
 print("network:", net_info.information.round(3).values[:8])
-print("mouse:  ", hp.spatial_information(mouse_maps).information.round(3).values)
+print("mouse:  ", hp.spatial_information(mouse, bin_size=0.04).information.round(3).values)

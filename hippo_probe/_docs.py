@@ -32,7 +32,8 @@ min_speed : float, optional
     from ``position`` within each trial (default: every sample).""",
     "by": """\
 by : {None, 'environment', 'trial'}
-    One result per environment or per trial (on one grid of bins), or one overall.""",
+    One result per environment or per trial (on one grid of bins), or one overall
+    (None: every environment's positions pooled; warned when there are several).""",
     "extent": """\
 extent : (x_min, x_max, y_min, y_max), optional
     Area covered by the bins (m); default: the arenas' bounding box when the recording
@@ -41,7 +42,7 @@ extent : (x_min, x_max, y_min, y_max), optional
     "n_shuffles": """\
 n_shuffles : int, optional
     Circular time shifts of the activity against the behaviour, each by at least
-    ``SHUFFLE.min_shift`` s, for the null distribution (default 100; 0 = none).""",
+    ``SHUFFLE.min_shift`` (20) s, for the null distribution (default 100; 0 = none).""",
     "seed": """\
 seed : int, optional
     Seed of the shuffles' shifts (default ``SHUFFLE.seed``): the same seed, the same

@@ -155,12 +155,22 @@ def check_path(name: str, value):
     raise TypeError(f"`{name}` must be a file path (str or os.PathLike); got {_fmt(value)}")
 
 
-def check_allocation(name: str, shape, itemsize: int = 8, *, limit: int = 2**31):
+def check_allocation(name: str, shape, itemsize: int = 8, *, limit: int = 2**31,
+                     shuffles: int = 1):
     """Refuse, before allocating it, a result of ``shape`` larger than ``limit`` bytes
-    (default 2 GiB), naming the argument that set its size and the memory it would take."""
-    n_bytes = int(np.prod([int(s) for s in shape], dtype=np.float64)) * itemsize
-    if n_bytes > limit:
+    (default 2 GiB), naming the argument that set its size and the memory it would take.
+
+    With ``shuffles`` > 1 the result is made once per shuffle (and the observed data):
+    when one copy fits but all of them do not, ``n_shuffles`` is named instead."""
+    def size(n):
+        return int(np.prod([int(s) for s in shape], dtype=np.float64)) * itemsize * n
+    if size(1) <= limit < size(shuffles):
+        raise ValueError(f"`n_shuffles` = {shuffles - 1} asks for {shuffles} results of "
+                         f"shape {tuple(int(s) for s in shape)} ({size(shuffles) / 2**30:.1f}"
+                         f" GiB, more than the {limit / 2**30:.0f} GiB limit); choose fewer "
+                         f"shuffles")
+    if size(1) > limit:
         raise ValueError(f"`{name}` asks for a result of shape {tuple(int(s) for s in shape)}"
-                         f" ({n_bytes / 2**30:.1f} GiB, more than the {limit / 2**30:.0f} "
+                         f" ({size(1) / 2**30:.1f} GiB, more than the {limit / 2**30:.0f} "
                          f"GiB limit); choose fewer or larger bins")
     return shape

@@ -759,8 +759,10 @@ def _plot_result(result, **kwargs):
         return remapping_cdf(result, **kwargs)
     if kind == "localization_error":
         return error_curves(result, **kwargs)
-    if kind == "classification_accuracy":
+    if kind in ("classification_accuracy", "decode_environment"):
         return accuracy_curve(result, **kwargs)
+    if kind == "intrinsic_dimension":
+        return bars(result["dimension"], title="intrinsic dimension", **kwargs)
     if kind == "correlation_dimension":
         return correlation_sum(result, **kwargs)
     if kind == "context_cells":
@@ -770,9 +772,23 @@ def _plot_result(result, **kwargs):
     if kind == "decode_covariance":
         return bars(result["r2"], title=f"decoding {result.attrs.get('target', '')}",
                     **kwargs)
-    per_unit = {"spatial_information": "information", "spatial_selectivity": "selectivity",
-                "place_field_stability": "stability"}
-    if kind in per_unit:
-        return cumulative(result[per_unit[kind]], title=kind.replace("_", " "), **kwargs)
+    if kind in PER_UNIT:
+        return cumulative(result[PER_UNIT[kind]], title=kind.replace("_", " "), **kwargs)
+    if kind == "map_scorecard":
+        raise ValueError("a map_scorecard is a table of numbers with nothing to draw: "
+                         "print it, or plot the rate maps it was made from")
     raise ValueError(f"no hippo_probe plot for a result with attrs['analysis'] = {kind!r}; "
-                     "expected the output of a hippo_probe analysis")
+                     f"expected the output of a hippo_probe analysis (a recording, or one "
+                     f"of: {', '.join(PLOTTED)})")
+
+
+#: Per-unit results drawn as the cumulative distribution of one measure over the units.
+PER_UNIT = {"spatial_information": "information", "spatial_selectivity": "selectivity",
+            "place_field_stability": "stability", "place_fields": "n_fields",
+            "grid_score": "grid_score", "border_score": "border_score",
+            "speed_score": "speed_score", "conjunctive_tuning": "pxd_direction_length"}
+#: Every analysis whose result ``.hp.plot()`` draws.
+PLOTTED = ("ratemaps", "spatial_autocorrelation", "head_direction_tuning", "classify_cells",
+           "remapping_similarity", "localization_error", "classification_accuracy",
+           "decode_environment", "correlation_dimension", "intrinsic_dimension",
+           "context_cells", "decode_covariance", *PER_UNIT)

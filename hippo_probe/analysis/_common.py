@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -15,6 +17,32 @@ from .config import CONVENTIONS, SHUFFLE
 
 class AnalysisWarning(UserWarning):
     """A result (or part of it) is NaN or approximate; the message says why."""
+
+
+_PACKAGE = str(Path(__file__).resolve().parents[1])
+
+
+def warn(message: str, category=AnalysisWarning) -> None:
+    """Warn, pointing at the first line outside the package that led here (the user's
+    call), however deep in the analysis the problem was found."""
+    frame, level = sys._getframe(1), 2
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, category, stacklevel=level)
+
+
+def warn_pooled_environments(rec, what: str) -> None:
+    """Warn when ``rec`` spans several environments and ``what`` pools them (``by`` is
+    None): each arena's positions would share one map, a mixture no arena has."""
+    if "environment" not in rec.variables:
+        return
+    env = values(rec["environment"])
+    if env.size and env.min() != env.max():
+        n = len(np.unique(env))
+        warn(f"the recording spans {n} environments and `by` is None: the {what} pool "
+             f"them, one map per unit over every arena's positions; pass "
+             f"by=\"environment\" for one map per environment (or select one with "
+             f"hp.select_trials(rec, environments=[...]))")
 
 
 def check_recording(rec, variables=(), *, why="", name="rec"):
@@ -109,9 +137,8 @@ def nonnegative_offset(rec, amin, floor=None) -> tuple[np.ndarray, str]:
     low = amin if tracked or floor is None else np.asarray(floor, float)
     if np.any(low < 0):
         what = "activity" if tracked else "map"
-        warnings.warn(
-            f"activity (kind {kind!r}) has negative values; each unit's {what} minus its "
-            "minimum is used as a non-negative rate", AnalysisWarning, stacklevel=3)
+        warn(f"activity (kind {kind!r}) has negative values; each unit's {what} minus its "
+             "minimum is used as a non-negative rate")
         return np.minimum(np.nan_to_num(low, nan=0.0), 0.0), (
             f"negative values found: each unit's {what} minus its minimum (units with "
             "min >= 0 unchanged)")
@@ -130,6 +157,12 @@ def provenance(analysis: str, rec=None, **params) -> dict:
     return attrs
 
 
+def shuffle_seed(seed):
+    """The seed the shuffles' shifts are drawn with: ``seed``, or ``SHUFFLE.seed`` when
+    None (what :func:`circular_shifts` uses; recorded in a result's provenance)."""
+    return SHUFFLE.seed if seed is None else seed
+
+
 def report_nan(attrs: dict, labels, reasons, what: str):
     """Record why entries are NaN (attrs['nan_reasons']) and warn once."""
     reasons = {str(k): r for k, r in zip(labels, reasons) if r}
@@ -139,8 +172,8 @@ def report_nan(attrs: dict, labels, reasons, what: str):
     attrs["nan_reasons"] = reasons
     sample = "; ".join(f"{k}: {r}" for k, r in list(reasons.items())[:3])
     more = f" (and {len(reasons) - 3} more)" if len(reasons) > 3 else ""
-    warnings.warn(f"{what} is NaN for {len(reasons)} entries: {sample}{more}; "
-                  "see attrs['nan_reasons']", AnalysisWarning, stacklevel=3)
+    warn(f"{what} is NaN for {len(reasons)} entries: {sample}{more}; "
+         "see attrs['nan_reasons']")
     return attrs
 
 

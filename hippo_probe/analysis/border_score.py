@@ -424,7 +424,8 @@ def border_score(rec_or_maps, *, walls=None, n_shuffles=None, seed=None, percent
         shuffled = np.concatenate([stack_border_stats(smooth, offset, geo, **kw)["score"]
                                    for smooth, _ in stack.shuffle_batches()])
     return border_dataset(maps, lead, stats, shuffled, geo, percentile, threshold, params=dict(
-        n_shuffles=n_shuffles, seed=seed, field_threshold=field_threshold, min_area=min_area,
+        n_shuffles=n_shuffles, seed=_common.shuffle_seed(seed),
+        field_threshold=field_threshold, min_area=min_area,
         min_field_bins=min_bins, search_width=search_width, merge_angle=BORDER.merge_angle,
         min_wall_bins=BORDER.min_wall_bins, rate_offset=why_offset))
 

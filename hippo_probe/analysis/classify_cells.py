@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 import xarray as xr
 
 from .._validators import check_option
 from . import _common
-from ._common import AnalysisWarning
 from ._shuffles import MapStack, summarize
 from .border_score import field_bins, resolve_walls, stack_border_stats
 from .config import (BORDER, CELL_CLASS, CONJUNCTIVE, CONVENTIONS, GRID, PLACE_FIELD, SPEED,
@@ -36,6 +34,24 @@ CLASSES = {
 }
 
 
+def _warn_unresolved_percentiles(cfg, n_shuffles, threshold):
+    """Warn when a unit's own ``n_shuffles`` shuffles cannot resolve a class's
+    percentile: its 99th percentile needs at least 100 of them (with fewer, the threshold
+    is about the largest shuffle and a class's false-positive rate is not the one its
+    percentile names). Pooled thresholds draw on every unit's shuffles."""
+    if threshold != "unit":
+        return
+    short = {name: getattr(cfg, attr) for name, (_, attr, _) in CLASSES.items()
+             if n_shuffles < 100.0 / (100.0 - getattr(cfg, attr))}
+    if short:
+        need = int(np.ceil(100.0 / (100.0 - max(short.values())) - 1e-9))
+        _common.warn(
+            f"`n_shuffles` = {n_shuffles} cannot resolve the percentile of "
+            + ", ".join(f"{name} ({p:g}th)" for name, p in short.items())
+            + f" against each unit's own shuffles: their classes are unreliable; use at "
+            f"least {need} (or threshold=\"pooled\")")
+
+
 def _one_environment(rec, environment):
     """The recording restricted to one environment (the most visited by default)."""
     if "environment" not in rec.variables:
@@ -46,10 +62,10 @@ def _one_environment(rec, environment):
         if len(ids) == 1:
             return rec, int(ids[0])
         environment = ids[np.argmax(counts)]
-        warnings.warn(f"the recording spans {len(ids)} environments; cell classes are "
+        _common.warn(f"the recording spans {len(ids)} environments; cell classes are "
                       f"measured in the most visited one, {environment} "
                       f"({counts.max()} of {len(env)} samples); pass `environment` to "
-                      "choose", AnalysisWarning, stacklevel=3)
+                      "choose")
     elif environment not in ids:
         raise ValueError(f"`environment` must be one of the recording's environments "
                          f"{ids.tolist()}; got {environment!r}")
@@ -103,9 +119,14 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     rec : xarray.Dataset
         A recording with ``activity`` and ``position`` (and ``head_direction`` for the
         head-direction and conjunctive classes: NaN without it); may be dask-backed.
-    %(n_shuffles)s
+    n_shuffles : int, optional
+        Circular time shifts of the activity against the behaviour, each by at least
+        ``SHUFFLE.min_shift`` (20) s (default 100, >= 1: every class is decided against
+        them). A unit's own 99th percentile needs at least 100 (warned if fewer).
     %(seed)s
     threshold : {'unit', 'pooled'}, optional
+        Each class's threshold from the unit's own shuffles (default) or from every
+        unit's shuffles pooled.
     environment : int, optional
         The environment to classify in (default: the most visited).
     walls : None, 'occupancy' or array (V, 2)
@@ -154,8 +175,8 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     >>> xy = np.abs((xy + 0.5) % 2 - 1) - 0.5                 # reflected in a 1 m box
     >>> place = np.exp(-((xy - 0.2) ** 2).sum(1) / 0.01)
     >>> rec = from_arrays(np.arange(n) * 0.1, xy, activity=place[:, None],
-    ...                   head_direction=hd, activity_kind="rate")
-    >>> table = classify_cells(rec, n_shuffles=20)
+    ...                   head_direction=np.angle(np.exp(1j * hd)), activity_kind="rate")
+    >>> table = classify_cells(rec)
     >>> str(table.cell_class[0].values)
     'place'
     """
@@ -170,16 +191,16 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
                          f"unit's shuffles; got {n_shuffles}")
     threshold = check_option("threshold", cfg.threshold if threshold is None else threshold,
                              ("unit", "pooled"))
+    _warn_unresolved_percentiles(cfg, n_shuffles, threshold)
     rec, env = _one_environment(rec, environment)
     sigma = GRID.sigma if sigma is None else sigma
     kind = rec.attrs.get("activity_kind")
     if kind in CONVENTIONS.noise_free_kinds:
-        warnings.warn(
+        _common.warn(
             f"activity_kind {kind!r} has no counting noise: with {rec.sizes['time']} samples "
             "almost any tuning beats the time-shift shuffles, so most units pass every "
             "test. To compare with recorded cells, classify spikes drawn at a cell's rate "
-            "over a session's duration: classify_cells(hp.poisson_spikes(rec, mean_rate=5.0))",
-            AnalysisWarning, stacklevel=2)
+            "over a session's duration: classify_cells(hp.poisson_spikes(rec, mean_rate=5.0))")
 
     maps, spatial, columns = _spatial_columns(rec, walls, n_shuffles=n_shuffles, seed=seed,
                                               bin_size=bin_size, sigma=sigma,
@@ -211,7 +232,8 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     _assign_classes(out, above, gate_above, border_obs["score"], fields.count, cfg)
     geo = spatial["walls"]
     attrs = _common.provenance(
-        "classify_cells", rec, n_shuffles=n_shuffles, seed=seed, threshold=threshold,
+        "classify_cells", rec, n_shuffles=n_shuffles, seed=_common.shuffle_seed(seed),
+        threshold=threshold,
         environment="None" if env is None else env, bin_size=spatial["size"], sigma=sigma,
         sigma_units="bins", min_speed=min_speed, rate_offset=spatial["why_offset"],
         walls_source=geo[0].source, wall_vertices=geo[0].vertices.tolist(),

@@ -63,7 +63,8 @@ class RateMapConfig:
     sigma : float
         Gaussian smoothing width in units of ``bin_size`` when ``sigma`` is None: one bin,
         the light smoothing customary for displayed maps. Information and selectivity use
-        their own defaults (unsmoothed), because smoothing inflates both.
+        their own defaults (unsmoothed), because smoothing biases both (it spreads a
+        field: a sharp field's information falls, a noisy map's rises).
     truncate : float
         The Gaussian kernel is cut at 4 standard deviations (scipy's default).
     min_occupancy : float

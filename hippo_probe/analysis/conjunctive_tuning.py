@@ -77,9 +77,9 @@ def factorize(sums, counts, n_iterations, tolerance):
             if change < tolerance:
                 break
         else:
-            warnings.warn(f"the position x direction model did not converge in "
+            _common.warn(f"the position x direction model did not converge in "
                           f"{n_iterations} iterations (relative change {change:.2g} > "
-                          f"{tolerance:g})", AnalysisWarning, stacklevel=3)
+                          f"{tolerance:g})")
     f = np.where(occ_x, f, np.nan)
     g = np.where(occ_d, g, np.nan)
     return f, g, n_iter
@@ -288,7 +288,8 @@ def conjunctive_tuning(rec, *, n_shuffles=None, seed=None, percentile=None, thre
         out["conjunctive"] = ("unit", both, {
             "units": "1", "long_name": "both factors above their thresholds"})
     attrs = _common.provenance(
-        "conjunctive_tuning", rec, n_shuffles=n_shuffles, seed=seed, percentile=percentile,
+        "conjunctive_tuning", rec, n_shuffles=n_shuffles, seed=_common.shuffle_seed(seed),
+        percentile=percentile,
         threshold=threshold, n_bins=n_bins, n_directions=n_dir, hd_bins=HEAD_DIRECTION.n_bins,
         bin_size=grid.bin_size, extent=list(grid.extent), min_speed=min_speed,
         samples_dropped=str(dropped), rate_offset=why,

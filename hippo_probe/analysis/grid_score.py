@@ -541,7 +541,8 @@ def grid_score(rec_or_maps, *, n_shuffles=None, seed=None, percentile=None, thre
                  for smooth, _ in stack.shuffle_batches()]
         shuffled = np.concatenate(parts).reshape((-1,) + shape)
     return grid_dataset(maps, lead, shape, stats, shuffled, percentile, threshold,
-                        params=dict(n_shuffles=n_shuffles, seed=seed, **kw))
+                        params=dict(n_shuffles=n_shuffles, seed=_common.shuffle_seed(seed),
+                                    **kw))
 
 
 def shuffled_scores(smooth, observed, kw):

@@ -134,7 +134,8 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     codes, labels, dim = _common.group_codes(rec, by)
     n_groups = 1 if labels is None else len(labels)
     shifts = _common.shifts_for(rec, n_shuffles, seed)
-    check_allocation("n_bins", (len(shifts), rec.sizes["unit"], n_groups, n_bins))
+    check_allocation("n_bins", (rec.sizes["unit"], n_groups, n_bins),
+                     shuffles=len(shifts))
     res = tuning_sums(rec, bins, codes, n_groups, n_bins, shifts)
     sums, counts = res.sums, res.counts
     warn_nonfinite(rec, res, "tuning curves")
@@ -187,7 +188,7 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
                              "(spike data only)")
     attrs = _common.provenance(
         "head_direction_tuning", rec, n_bins=n_bins, sigma=sigma, sigma_units="bins",
-        n_shuffles=n_shuffles, seed=seed, by=by, min_speed=min_speed,
+        n_shuffles=n_shuffles, seed=_common.shuffle_seed(seed), by=by, min_speed=min_speed,
         rate_offset=why_offset, samples_without_direction=n_dir_nan,
         mean_vector="from the occupancy-normalised curve (bin centres)", **notes)
     reasons = ["no visited direction bin" if not np.isfinite(c).any() else

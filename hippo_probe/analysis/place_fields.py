@@ -171,6 +171,10 @@ def check_maps(name, maps):
     if not isinstance(maps, xr.DataArray):
         raise TypeError(f"`{name}` must be a recording (xarray.Dataset) or the output of "
                         f"ratemaps() (xarray.DataArray); got {type(maps).__name__}")
+    if not {"y", "x"} <= set(maps.dims):      # e.g. a recording's activity
+        raise ValueError(f"`{name}` must be a recording (xarray.Dataset) or the output of "
+                         f"ratemaps() (dims unit, [group], y, x); got a DataArray with dims "
+                         f"{maps.dims}")
     check_dims(name, maps, ("unit", "y", "x"))
     if maps.ndim > 4:
         raise ValueError(f"`{name}` must have dims (unit, [group], y, x); got {maps.dims}")

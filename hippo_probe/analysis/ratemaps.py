@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -12,7 +11,6 @@ from scipy import ndimage
 from .._validators import check_allocation, check_number, check_real, check_shape
 from . import _common
 from ._binning import BinSums, bin_sums, compact, grid_bins
-from ._common import AnalysisWarning
 from .._docs import fill_doc
 from .config import RATEMAP
 
@@ -80,11 +78,11 @@ def _warn_outliers_set_extent(x, y, lo, hi):
         if (b - a) > RATEMAP.outlier_stretch * span:
             margin = 0.25 * span            # count the far samples, not the core's tails
             n_out = int(((values < core_lo - margin) | (values > core_hi + margin)).sum())
-            warnings.warn(
+            _common.warn(
                 f"{n_out} of {int(np.isfinite(values).sum())} samples stretch the {axis} "
                 f"extent to [{a:.3g}, {b:.3g}] m while the rest lie in [{core_lo:.3g}, "
                 f"{core_hi:.3g}] m: the bins are coarser than intended. Pass `extent=` "
-                f"(or clean the tracking)", AnalysisWarning, stacklevel=4)
+                f"(or clean the tracking)")
 
 
 def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None, xy=None) -> Grid:
@@ -110,15 +108,23 @@ def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None, xy=None) -> Gr
             _warn_outliers_set_extent(x, y, lo, hi)
             pad = RATEMAP.extent_margin * np.maximum(hi - lo, 1e-12)
             extent = (lo[0] - pad[0], hi[0] + pad[0], lo[1] - pad[1], hi[1] + pad[1])
-    extent = tuple(float(e) for e in check_shape("extent", check_real("extent", extent).astype(float), (4,)))
+    extent = tuple(float(e) for e in check_shape(
+        "extent", check_real("extent", extent).astype(float), (4,)))
     width, height = extent[1] - extent[0], extent[3] - extent[2]
     if not (np.isfinite(extent).all() and width > 0 and height > 0):
         raise ValueError("`extent` must be finite (x_min, x_max, y_min, y_max) with "
                          f"x_min < x_max and y_min < y_max; got {extent}")
-    if bin_size is None:
+    defaulted = bin_size is None
+    if defaulted:
         bin_size = max(width, height) / (n_bins or RATEMAP.n_bins)
     bin_size = check_number("bin_size", bin_size, low=0)
     if bin_size >= min(width, height):
+        if defaulted:       # the extent is what is wrong, not an argument never given
+            raise ValueError(
+                f"the extent ({width:.3g} x {height:.3g} m) is so elongated that its "
+                f"default bins ({bin_size:.3g} m, the longer side / "
+                f"{n_bins or RATEMAP.n_bins}) do not fit its shorter side: pass `extent=` "
+                f"(a few stray positions may have stretched it) or a `bin_size`")
         raise ValueError(f"`bin_size` must be > 0 and smaller than the arena "
                          f"({width:.3g} x {height:.3g} m); got {bin_size}")
     nx = int(np.ceil(width / bin_size - 1e-9))
@@ -201,9 +207,9 @@ def warn_nonfinite(rec, res, what):
     bad = ~np.isfinite(res.sums[0]).reshape(res.sums.shape[1], -1).all(axis=1)
     if bad.any():
         units = _common.values(rec["unit"])[bad] if "unit" in rec.coords else np.flatnonzero(bad)
-        warnings.warn(f"`rec.activity` holds NaN or inf for units {list(units[:5])}"
+        _common.warn(f"`rec.activity` holds NaN or inf for units {list(units[:5])}"
                       f"{' ...' if bad.sum() > 5 else ''}: their {what} are NaN in the "
-                      "bins where such samples fall", AnalysisWarning, stacklevel=3)
+                      "bins where such samples fall")
 
 
 def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent,
@@ -222,16 +228,18 @@ def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent
     grid = spatial_grid(rec, bin_size, extent, n_bins=n_bins, xy=xy)
     bins, dropped = position_bins(rec, grid, min_speed=min_speed, xy=xy)
     codes, labels, dim = _common.group_codes(rec, by) if groups is None else groups
+    if by is None and groups is None:
+        _common.warn_pooled_environments(rec, "rate maps")
     n_groups = 1 if labels is None else len(labels)
     n_valid = int((bins >= 0).sum())
     if n_valid == 0:
         raise ValueError(f"no sample left to map: {dropped} (of {len(bins)} samples)")
     n_cells = grid.nx * grid.ny * n_groups
-    check_allocation("bin_size", (len(shifts), rec.sizes["unit"], n_groups, grid.ny, grid.nx))
+    check_allocation("bin_size", (rec.sizes["unit"], n_groups, grid.ny, grid.nx),
+                     shuffles=len(shifts))
     if n_valid < RATEMAP.few_samples_ratio * n_cells:
-        warnings.warn(f"only {n_valid} valid samples for {n_cells} bins: most bins are "
-                      "unvisited and NaN; use a larger `bin_size`", AnalysisWarning,
-                      stacklevel=3)
+        _common.warn(f"only {n_valid} valid samples for {n_cells} bins: most bins are "
+                      "unvisited and NaN; use a larger `bin_size`")
     res = tuning_sums(rec, bins, codes, n_groups, grid.nx * grid.ny, shifts, want_sq)
     warn_nonfinite(rec, res, "rate maps")
     dt = _common.sample_dt(rec)
@@ -239,7 +247,12 @@ def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent
     sums = res.sums.reshape(res.sums.shape[:3] + shape)
     counts = res.counts.reshape((n_groups,) + shape)
     maps = smooth_normalized(sums, counts, sigma)
-    maps[..., (counts == 0) | (counts * dt < min_occupancy)] = np.nan
+    unvisited = (counts == 0) | (counts * dt < min_occupancy)
+    maps[..., unvisited] = np.nan
+    if unvisited.all():
+        _common.warn(f"every bin is NaN: no bin is visited for `min_occupancy` = "
+                     f"{min_occupancy} s (the most visited: "
+                     f"{counts.max() * dt:.3g} s)")
     return dict(maps=maps, counts=counts, res=res, sums=sums, grid=grid, dropped=dropped,
                 labels=labels, dim=dim, codes=codes, n_valid=n_valid, dt=dt,
                 sigma=sigma, min_occupancy=min_occupancy)

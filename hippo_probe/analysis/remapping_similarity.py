@@ -169,7 +169,8 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
                                                               "long_name": "pairs"})
     attrs = _common.provenance(
         "remapping_similarity", rec, bin_size=parts["grid"].bin_size, sigma=parts["sigma"],
-        sigma_units="bins", min_speed=min_speed, min_common_bins=min_common, seed=seed,
+        sigma_units="bins", min_speed=min_speed, min_common_bins=min_common,
+        seed=REMAPPING.seed if seed is None else seed,
         center_units=bool(center_units),
         control="environment labels of the trials randomly permuted")
     reasons = [f"the trials share {c} visited bins (< {min_common})" if not np.isfinite(v)
@@ -180,7 +181,6 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
     if empty:
         attrs["empty_comparisons"] = (f"{empty}: no pair of that kind (e.g. only one "
                                       "environment); their summaries are NaN")
-        warnings.warn(f"remapping summaries are NaN for {attrs['empty_comparisons']}",
-                      _common.AnalysisWarning, stacklevel=2)
+        _common.warn(f"remapping summaries are NaN for {attrs['empty_comparisons']}")
     out.attrs = _common.report_nan(attrs, labels, reasons, "remapping similarity")
     return out

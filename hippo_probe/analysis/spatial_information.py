@@ -39,7 +39,7 @@ def skaggs_information(maps, occupancy, axes):
 
 def _nan_reason(mean, total_occ):
     if not np.isfinite(total_occ) or total_occ <= 0:
-        return "no visited bin"
+        return "no bin with a rate (unvisited, or below `min_occupancy`)"
     if not np.isfinite(mean):
         return "activity holds NaN or inf"
     if mean <= 0:
@@ -169,13 +169,14 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
             "units": unit_info, "long_name": "shuffle-corrected spatial information"})
         out["p_value"] = (lead, (1 + exceed) / len(stack), {
             "units": "1", "long_name": "fraction of shuffles at least as informative"})
-    total_occ = np.broadcast_to(occ.sum(axis=axes), mean.shape)
+    # the occupancy of the bins with a rate: those below `min_occupancy` are NaN maps
+    total_occ = np.where(np.isfinite(maps.values), occ, 0.0).sum(axis=axes)
     reasons = [_nan_reason(m, o) for m, o in zip(mean.ravel(), total_occ.ravel())]
     attrs = {k: v for k, v in attrs_from.items()
              if k not in ("analysis", "units", "long_name", "arena_vertices",
                           "arena_environment")}
     attrs.update(_common.provenance("spatial_information", n_shuffles=n_shuffles,
-                                    seed=seed, rate_offset=why_offset,
+                                    seed=_common.shuffle_seed(seed), rate_offset=why_offset,
                                     definition="Skaggs et al. 1993, no clipping"))
     out.attrs = _common.report_nan(attrs, _common.entry_labels(out["information"]),
                                    reasons, "spatial information")

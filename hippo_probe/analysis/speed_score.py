@@ -232,7 +232,8 @@ def speed_score(rec, *, n_shuffles=None, seed=None, percentile=None, threshold=N
         add_significance(out, "speed_score", ("unit",), r[:, 0], r[:, 1:].T, percentile,
                          threshold, "1", "speed score")
     attrs = _common.provenance(
-        "speed_score", rec, n_shuffles=n_shuffles, seed=seed, percentile=percentile,
+        "speed_score", rec, n_shuffles=n_shuffles, seed=_common.shuffle_seed(seed),
+        percentile=percentile,
         threshold=threshold, sigma=sigma, sigma_units="s", min_speed=min_speed,
         max_speed=max_speed,
         speed_source="rec.speed" if "speed" in rec else "derived from position",

@@ -11,6 +11,8 @@ The builder of ``hippo-probe figures --only fig4`` and of the script
 ``paper_figures/fig4.py``; contract in :mod:`hippo_probe.paper`.
 """
 
+import warnings
+
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -50,7 +52,11 @@ def _maps_panel(sub, rec, title, numbers, key):
     maps, (a, b) = _three_maps(rec)
     same = _corr(maps[0], maps[1])
     across = _corr(maps[0], maps[2])
-    sel = hp.spatial_selectivity(rec, bin_size=BIN).selectivity
+    with warnings.catch_warnings():
+        # the two arenas pooled on purpose: the examples are the units whose activity
+        # position explains best over both
+        warnings.filterwarnings("ignore", "the recording spans", hp.AnalysisWarning)
+        sel = hp.spatial_selectivity(rec, bin_size=BIN).selectivity
     sel = sel.max(dim=[d for d in sel.dims if d != "unit"]) if sel.ndim > 1 else sel
     examples = np.argsort(-np.nan_to_num(sel.values))[:N_EXAMPLES]
     gs = sub.add_gridspec(N_EXAMPLES, 4, width_ratios=[1, 1, 1, 2.2], wspace=0.05,

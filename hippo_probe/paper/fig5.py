@@ -58,9 +58,11 @@ def make(cfg, out):
         # same few times in every trial); coloured by time in trial: the prior's broad
         # covariance sits at the trial start
         shown = np.sort(rng.choice(ok, min(4000, ok.size), replace=False))
+        # rasterized in the PDF (the PNG is the same): 4,000 vector dots a panel made it
+        # slow to write and to open
         dots = a.scatter(truth[shown], pred[shown], s=2, alpha=0.4,
                          c=loc.trial_time.values[shown], cmap="viridis",
-                         vmin=0, vmax=trial_length)
+                         vmin=0, vmax=trial_length, rasterized=True)
         lim = [np.nanmin(truth), np.nanmax(truth)]
         a.plot(lim, lim, color="tab:red", lw=0.8, label="identity")
         a.legend(frameon=False, fontsize=7, loc="upper left")

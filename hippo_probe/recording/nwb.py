@@ -248,7 +248,18 @@ def _read_head_direction(nwb, name, floor_axes, sign, time, path):
                              "(cannot tell which is the rotation about the vertical)")
     check_option("head_direction", key, list(axes))
     series = axes[key][0]
-    scale = NWB_ANGLE_UNITS.get(str(series.unit).strip().lower(), 1.0)
+    declared = str(series.unit).strip().lower()
+    scale = NWB_ANGLE_UNITS.get(declared)
+    if scale is None:
+        # taken as radians, said aloud: degrees read as radians would pass the
+        # plausibility check below (unwrapped angles may span many turns)
+        warnings.warn(f"the head direction in {path} has "
+                      + (f"no unit ({series.unit!r})" if declared in
+                         ("", "unknown", "none", "n/a", "a.u.")
+                         else f"the unit {series.unit!r}, not an angle this reader knows "
+                              f"({sorted(NWB_ANGLE_UNITS)})")
+                      + ": taken as radians", UserWarning, stacklevel=4)
+        scale = 1.0
     if sign == "auto":
         # Right-handed rotation about the vertical c turns the floor axis a toward b when
         # (a, b, c) is a cyclic order of (x, y, z); otherwise the counter-clockwise angle

@@ -70,6 +70,24 @@ def test_per_unit_results_plot_as_distributions(place):
         assert fig.axes[0].get_xlabel()
 
 
+def test_every_scored_result_plots_itself(place):
+    """The results the guides promise ``.hp.plot()`` for: the scores per unit as their
+    distributions, the decoders' accuracy over time, the dimension estimates as bars."""
+    rec = two_environment_recording(n_units=4, n_trials=6, samples_per_trial=800)
+    results = [hp.place_fields(place, bin_size=0.05),
+               hp.grid_score(place, bin_size=0.05, n_shuffles=0),
+               hp.border_score(place, bin_size=0.05, n_shuffles=0),
+               hp.speed_score(place, n_shuffles=0),
+               hp.decode_environment(rec, n_folds=2),
+               hp.intrinsic_dimension(np.random.default_rng(0).uniform(size=(600, 3)))]
+    for res in results:
+        fig = res.hp.plot()
+        assert isinstance(fig, Figure) and fig.axes[0].has_data(), res.attrs["analysis"]
+    assert results[0].hp.plot().axes[0].get_ylabel() == "cumulative fraction"
+    with pytest.raises(ValueError, match="nothing to draw"):
+        plot.plot_result(hp.map_scorecard(rec, bin_size=0.1))
+
+
 def test_error_curves_and_unknown_results(place):
     rec = place.copy()
     rec["estimate"] = rec.position + 0.05

@@ -119,7 +119,7 @@ def test_network_recording_round_trips_through_nwb(network_recording, tmp_path):
         to_nwb(network_recording, tmp_path / "net.nwb")
 
 
-def _write_nwb(path, *, position=True, trials=None, spikes=(), unit="cm"):
+def _write_nwb(path, *, position=True, trials=None, spikes=(), unit="cm", hd_unit="degrees"):
     nwb = pynwb.NWBFile(session_description="synthetic", identifier="synthetic",
                         session_start_time=datetime.datetime(2020, 1, 1,
                                                              tzinfo=datetime.timezone.utc))
@@ -130,7 +130,7 @@ def _write_nwb(path, *, position=True, trials=None, spikes=(), unit="cm"):
         behavior.add(Position(spatial_series=SpatialSeries(
             name="pos", data=xy, timestamps=t, unit=unit, reference_frame="", conversion=0.5)))
         behavior.add(CompassDirection(spatial_series=SpatialSeries(
-            name="hd", data=np.degrees(t + np.pi / 2) % 360, timestamps=t, unit="degrees",
+            name="hd", data=np.degrees(t + np.pi / 2) % 360, timestamps=t, unit=hd_unit,
             reference_frame="")))
     for times in spikes:
         nwb.add_unit(spike_times=times)
@@ -160,6 +160,14 @@ def test_processing_behavior_conversion_units_and_touching_trials(tmp_path):
     last_of_first = rec.time.values[rec.trial.values == rec.trial_id.values[0]][-1]
     assert first_of_second - last_of_first >= 2 * rec.attrs["dt"] * 0.9
     assert int(rec.activity.sum()) == spikes[0].size          # every spike inside a trial
+
+
+@pytest.mark.parametrize("hd_unit, said", [("gradians", "not an angle this reader knows"),
+                                            ("", "no unit")])
+def test_an_unknown_head_direction_unit_is_taken_as_radians_aloud(tmp_path, hd_unit, said):
+    _write_nwb(tmp_path / "s.nwb", spikes=[np.array([0.5])], hd_unit=hd_unit)
+    with pytest.warns(UserWarning, match=f"head direction in .* has .*{said}.*taken as radians"):
+        from_nwb(tmp_path / "s.nwb", epoch=None)
 
 
 def test_bad_inputs_write_nothing(tmp_path, capsys):

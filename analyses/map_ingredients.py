@@ -141,6 +141,18 @@ def network_of(name):
     return name if Path(name).exists() else name.partition("@")[0]
 
 
+def check_distinct(names):
+    """Refuse a network named twice (``name`` is ``name@0``: seed 0 is the default)."""
+    seen = {}
+    for name in names:
+        seed = "" if Path(name).exists() else (name.partition("@")[2] or "0")
+        key = (network_of(name), int(seed) if seed.isdigit() else seed)
+        if key in seen:
+            raise SystemExit(f"--networks names one network twice: {seen[key]!r} and "
+                             f"{name!r}")
+        seen[key] = name
+
+
 def across_seeds(rows):
     """Per network given at two or more seeds: each headline measure's mean, minimum and
     maximum over the seeds (NaN and unmeasured values left out), and each verdict's
@@ -192,7 +204,7 @@ def seeds_table(summary):
     return "\n".join(lines) + "\n"
 
 
-def scorecard_figure(maps, shown, rows):
+def scorecard_figure(maps, shown, rows, n_seeds=None):
     """Per network two rows of rate maps (its ``N_SHOWN`` most informative units, the
     same units in arena 0 and arena 1, each unit's colours spanning its range over both
     arenas) and its scorecard beside them."""
@@ -221,6 +233,9 @@ def scorecard_figure(maps, shown, rows):
         text.axis("off")
         lines = [f"{label} ({row['variant']}"
                  + (", a departure)" if row["departure_from_study"] else ", the study's)")]
+        given = (n_seeds or {}).get(network_of(name), 1)
+        if given > 1:
+            lines[0] += f", the first of {given} seeds"
         lines += [f"{what:<25}" + score_text(row, key, fmt)
                   for what, key, fmt in SCORE_LINES]
         text.text(0.0, 1.0, "\n".join(lines), va="top", ha="left", family="monospace",
@@ -247,6 +262,7 @@ def main():
                     help="the readout's feature cache (resumable)")
     ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "map_ingredients"))
     a = ap.parse_args()
+    check_distinct(a.networks)
     limit_threads(1)          # one process per core: BLAS too, not only torch
     out = Path(a.out)
     rows, maps, shown, pf, arenas = [], {}, {}, {}, {}
@@ -309,7 +325,8 @@ def main():
     for row in rows:
         first.setdefault(network_of(row["network"]), row)
     drawn = [row["network"] for row in first.values()]
-    fig = scorecard_figure({n: maps[n] for n in drawn}, shown, list(first.values()))
+    fig = scorecard_figure({n: maps[n] for n in drawn}, shown, list(first.values()),
+                           n_seeds={k: len(v["seeds"]) for k, v in seeds.items()})
     save_figure(fig, out / "map_ingredients.png", dpi=110)
     plt.close(fig)
 

@@ -38,3 +38,10 @@ def test_seeds_of_a_network_are_summarised_and_single_networks_are_not(script):
     assert len(table) == 3 and table[0].count("|") == table[2].count("|")
     assert "| `generalized_nonneg` | 3 | 20,000 | 3.25 (3.00–3.50) |" in table[2]
     assert table[2].endswith("| 2 of 3 | 0 of 3 |")
+
+
+def test_a_network_named_twice_is_refused(script):
+    script.check_distinct(["generalized", "generalized@1", "generalized_nonneg"])
+    with pytest.raises(SystemExit, match="names one network twice: 'generalized' and "
+                                         "'generalized@0'"):
+        script.check_distinct(["generalized", "generalized@0"])

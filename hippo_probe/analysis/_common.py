@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -19,7 +19,8 @@ class AnalysisWarning(UserWarning):
     """A result (or part of it) is NaN or approximate; the message says why."""
 
 
-_PACKAGE = str(Path(__file__).resolve().parents[1])
+# as imported (code objects carry the path they were loaded from, links unresolved)
+_PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
 
 
 def warn(message: str, category=AnalysisWarning) -> None:
@@ -39,10 +40,17 @@ def warn_pooled_environments(rec, what: str) -> None:
     env = values(rec["environment"])
     if env.size and env.min() != env.max():
         n = len(np.unique(env))
+        trials = values(rec["trial"]) if "trial" in rec.variables else None
+        if trials is not None and n == len(np.unique(trials)):
+            advice = ("each trial is in an arena of its own (a novel-arena task): record "
+                      "several trials in a few fixed arenas instead (e.g. "
+                      "hp.tasks.task_config(task, arenas=\"fixed\", n_arenas=2)) and pass "
+                      "by=\"environment\"")
+        else:
+            advice = ("pass by=\"environment\" for one map per environment (or select "
+                      "one with hp.select_trials(rec, environments=[...]))")
         warn(f"the recording spans {n} environments and `by` is None: the {what} pool "
-             f"them, one map per unit over every arena's positions; pass "
-             f"by=\"environment\" for one map per environment (or select one with "
-             f"hp.select_trials(rec, environments=[...]))")
+             f"them, one map per unit over every arena's positions; {advice}")
 
 
 def check_recording(rec, variables=(), *, why="", name="rec"):

@@ -117,7 +117,7 @@ class MapStack:
         # about 64 MB of float64 sums per batch
         self.batch = batch or max(1, int(8e6 // max(1, n_units * 1024)))
         first = self.shifts[: self.batch]
-        parts = _ratemap_parts(rec, shifts=first, **self._kw)
+        parts = _ratemap_parts(rec, shifts=first, batch=True, **self._kw)
         self.parts = parts
         self.scale = _common.rate_scale(rec)[0]
         smooth, raw = self._maps(parts, squeeze=False)
@@ -149,7 +149,7 @@ class MapStack:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", AnalysisWarning)  # said for the first batch
                 parts = _ratemap_parts(self.rec, shifts=self.shifts[start:start + self.batch],
-                                       **self._kw)
+                                       batch=True, **self._kw)
             yield self._maps(parts)
 
     @property

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validators import check_option
+from .._validators import check_number, check_option
 from . import _common
 from ._shuffles import MapStack, summarize
 from .border_score import field_bins, resolve_walls, stack_border_stats
@@ -41,8 +41,9 @@ def _warn_unresolved_percentiles(cfg, n_shuffles, threshold):
     percentile names). Pooled thresholds draw on every unit's shuffles."""
     if threshold != "unit":
         return
+    # a 100th percentile is the largest shuffle whatever their number: nothing to resolve
     short = {name: getattr(cfg, attr) for name, (_, attr, _) in CLASSES.items()
-             if n_shuffles < 100.0 / (100.0 - getattr(cfg, attr))}
+             if getattr(cfg, attr) < 100 and n_shuffles < 100.0 / (100.0 - getattr(cfg, attr))}
     if short:
         need = int(np.ceil(100.0 / (100.0 - max(short.values())) - 1e-9))
         _common.warn(
@@ -189,6 +190,8 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
             and n_shuffles < 1:
         raise ValueError(f"`n_shuffles` must be >= 1: every class is decided against the "
                          f"unit's shuffles; got {n_shuffles}")
+    n_shuffles = check_number("n_shuffles", n_shuffles, low=1, low_inclusive=True,
+                              integer=True)
     threshold = check_option("threshold", cfg.threshold if threshold is None else threshold,
                              ("unit", "pooled"))
     _warn_unresolved_percentiles(cfg, n_shuffles, threshold)

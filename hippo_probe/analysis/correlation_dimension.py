@@ -119,6 +119,8 @@ def _count_rows(dots, sq, i0, order, trial, theiler, thresholds, guesses, offset
                 cell = (bits[0] >> _GUESS_SHIFT) - offset
                 if cell >= 0:                 # below the table: below every threshold > 0
                     k = guesses[min(cell, last)]
+            elif s != s:                      # NaN (inf - inf): past every edge, as
+                k = n_edges                   # searchsorted puts it
             else:
                 s = 0.0
             while k < n_edges and thresholds[k] <= s:   # the guess is never too high
@@ -159,9 +161,10 @@ def pair_counts(points, order, trial, theiler, edges, block=None):
     order = np.ascontiguousarray(order, np.int64)
     trial = np.ascontiguousarray(trial, np.int64)
     edges = np.ascontiguousarray(edges, np.float64)
-    if edges.ndim != 1 or edges.size == 0 or (np.diff(edges) <= 0).any():
-        raise ValueError(f"`edges` must be a non-empty increasing 1-D array; got "
-                         f"{edges.size} values")
+    if edges.ndim != 1 or edges.size == 0 or np.isnan(edges).any() \
+            or (np.diff(edges) <= 0).any():
+        raise ValueError(f"`edges` must be a non-empty increasing 1-D array without NaN; "
+                         f"got {edges.size} values")
     thresholds = squared_thresholds(edges)
     guesses, offset = bin_guesses(thresholds)
     hist = np.zeros(len(edges) + 1, np.int64)
@@ -286,6 +289,9 @@ def correlation_dimension(rec_or_array, *, max_points=None, theiler=None, transi
     if not np.isfinite(points).all():
         raise ValueError("`rec_or_array` holds NaN or inf in the selected samples: distances "
                          "are undefined")
+    if not np.isfinite((points ** 2).sum(axis=1)).all():
+        raise ValueError("`rec_or_array` holds values too large to square (beyond about "
+                         "1e154): its distances overflow; rescale it")
     if len(points) < 10:
         raise ValueError(f"correlation dimension needs at least 10 samples after dropping "
                          f"the transient; got {len(points)}")

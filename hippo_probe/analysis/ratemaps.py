@@ -213,8 +213,11 @@ def warn_nonfinite(rec, res, what):
 
 
 def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent,
-                   shifts=(0,), n_bins=None, want_sq=False, groups=None):
+                   shifts=(0,), n_bins=None, want_sq=False, groups=None, batch=False):
     """Everything a rate map (and its shuffles) is made of.
+
+    ``batch``: ``shifts`` are one batch of the shuffles (:class:`~._shuffles.MapStack`),
+    not all of them: a batch too large for memory is the bins' doing, not the shuffles'.
 
     ``groups = (codes, labels, dim)`` replaces the grouping given by ``by``.
     """
@@ -235,8 +238,11 @@ def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent
     if n_valid == 0:
         raise ValueError(f"no sample left to map: {dropped} (of {len(bins)} samples)")
     n_cells = grid.nx * grid.ny * n_groups
-    check_allocation("bin_size", (rec.sizes["unit"], n_groups, grid.ny, grid.nx),
-                     shuffles=len(shifts))
+    one = (rec.sizes["unit"], n_groups, grid.ny, grid.nx)
+    if batch:
+        check_allocation("bin_size", (len(shifts),) + one)
+    else:
+        check_allocation("bin_size", one, shuffles=len(shifts))
     if n_valid < RATEMAP.few_samples_ratio * n_cells:
         _common.warn(f"only {n_valid} valid samples for {n_cells} bins: most bins are "
                       "unvisited and NaN; use a larger `bin_size`")
@@ -250,9 +256,8 @@ def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent
     unvisited = (counts == 0) | (counts * dt < min_occupancy)
     maps[..., unvisited] = np.nan
     if unvisited.all():
-        _common.warn(f"every bin is NaN: no bin is visited for `min_occupancy` = "
-                     f"{min_occupancy} s (the most visited: "
-                     f"{counts.max() * dt:.3g} s)")
+        _common.warn(f"every bin is NaN: no bin reaches `min_occupancy` = "
+                     f"{min_occupancy} s (the most visited: {counts.max() * dt:.3g} s)")
     return dict(maps=maps, counts=counts, res=res, sums=sums, grid=grid, dropped=dropped,
                 labels=labels, dim=dim, codes=codes, n_valid=n_valid, dt=dt,
                 sigma=sigma, min_occupancy=min_occupancy)

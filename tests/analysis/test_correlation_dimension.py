@@ -172,3 +172,35 @@ def test_squared_thresholds_bin_exactly_as_the_square_root_would():
     s = s[s >= 0]
     np.testing.assert_array_equal(s[:, None] >= t[None, :],
                                   edges[None, :] <= np.sqrt(s)[:, None])
+
+
+def test_count_rows_bins_extreme_squared_distances_as_searchsorted():
+    """The compiled binning against searchsorted on the square root, one squared distance
+    at a time: 0, -0.0, negatives, subnormals, the largest double, inf, NaN, every
+    threshold and its neighbours, the guess table's cell boundaries."""
+    from hippo_probe.analysis.correlation_dimension import (
+        _GUESS_SHIFT, _count_rows, bin_guesses, squared_thresholds)
+
+    edges = np.array([-1.0, 0.0, 1e-200, 3e-162, 1e-160, 1e-5, 1.0,
+                      np.nextafter(1.0, 2.0), 1e154, 1.35e154, 1e300, np.inf])
+    t = squared_thresholds(edges)
+    guesses, offset = bin_guesses(t)
+    finite = t[np.isfinite(t)]
+    cells = np.arange(offset, offset + len(guesses) + 1, max(1, len(guesses) // 64))
+    boundaries = (cells << _GUESS_SHIFT).view(np.float64)
+    rng = np.random.default_rng(8)
+    values = np.r_[0.0, -0.0, -1e-300, 5e-324, 2.2250738585072014e-308,
+                   np.finfo(float).max, np.inf, np.nan, finite, np.nextafter(finite, np.inf),
+                   np.nextafter(finite, -np.inf), boundaries,
+                   np.nextafter(boundaries, -np.inf),
+                   rng.uniform(-1, 1, 500) * 10.0 ** rng.uniform(-320, 308, 500)]
+    for s in values:
+        hist = np.zeros(len(edges) + 1, np.int64)
+        _count_rows(np.zeros((1, 2)), np.array([0.0, s]), 0, np.arange(2),
+                    np.zeros(2, np.int64), 0.0, t, guesses, offset, hist)
+        with np.errstate(invalid="ignore"):
+            want = np.searchsorted(edges, np.sqrt(np.maximum(s, 0.0)), side="right")
+        assert np.flatnonzero(hist).tolist() == [want], s
+    with pytest.raises(ValueError, match="without NaN"):
+        pair_counts(np.zeros((3, 2)), np.arange(3), np.zeros(3, np.int64), theiler=0,
+                    edges=np.array([0.5, np.nan, 2.0]))

@@ -42,6 +42,11 @@ def test_pooling_environments_warns_at_the_callers_line():
         assert not [w for w in found if "environments" in str(w.message)]
     _, found = caught(lambda: hp.spatial_information(rec, bin_size=0.1))
     assert any("spans 2 environments" in str(w.message) for w in found)
+    # a novel-arena task: every trial its own arena, where maps per arena are one trial
+    _, found = caught(lambda: hp.ratemaps(two_arena_rec(environments=range(8)),
+                                          bin_size=0.1))
+    (w,) = [w for w in found if "spans 8 environments" in str(w.message)]
+    assert "an arena of its own" in str(w.message) and 'arenas="fixed"' in str(w.message)
 
 
 def test_a_min_occupancy_no_bin_reaches_is_named():
@@ -106,3 +111,10 @@ def test_a_recordings_activity_given_for_maps_is_named_as_such():
     with pytest.raises(ValueError, match=r"a recording \(xarray.Dataset\) or the output of "
                                          r"ratemaps\(\).*got a DataArray with dims"):
         hp.place_fields(rec.activity)
+
+
+def test_the_shared_shuffle_docs_state_the_configured_minimum_shift():
+    from hippo_probe._docs import DOCS
+    from hippo_probe.analysis.config import SHUFFLE
+
+    assert f"``SHUFFLE.min_shift`` ({SHUFFLE.min_shift:g}) s" in DOCS["n_shuffles"]

@@ -20,7 +20,7 @@ import numpy as np
 from .._validators import check_number, check_option
 from . import _common
 from ._common import AnalysisWarning, shifts_for
-from .ratemaps import _maps_dataarray, _ratemap_parts, smooth_normalized
+from .ratemaps import _maps_dataarray, _ratemap_parts, smooth_normalized, spatial_grid
 
 
 def check_percentile(name, value):
@@ -113,9 +113,13 @@ class MapStack:
         self.sigma = check_number("sigma", sigma, low=0, low_inclusive=True)
         self._kw = dict(bin_size=bin_size, sigma=0.0, min_occupancy=None,
                         min_speed=min_speed, by=by, extent=extent)
-        n_units = rec.sizes["unit"]
-        # about 64 MB of float64 sums per batch
-        self.batch = batch or max(1, int(8e6 // max(1, n_units * 1024)))
+        # about 64 MB of float64 sums per batch, from the maps' real size: fine bins make
+        # smaller batches, not a refusal
+        grid = spatial_grid(rec, bin_size, extent)
+        n_groups = 1 if by is None else len(np.unique(_common.values(rec[by]))) \
+            if by in rec.variables else 1
+        per_shift = rec.sizes["unit"] * n_groups * grid.nx * grid.ny
+        self.batch = batch or max(1, int(8e6 // max(1, per_shift)))
         first = self.shifts[: self.batch]
         parts = _ratemap_parts(rec, shifts=first, batch=True, **self._kw)
         self.parts = parts

@@ -176,7 +176,7 @@ def classify_cells(rec, *, n_shuffles=None, seed=None, threshold=None, environme
     >>> xy = np.abs((xy + 0.5) % 2 - 1) - 0.5                 # reflected in a 1 m box
     >>> place = np.exp(-((xy - 0.2) ** 2).sum(1) / 0.01)
     >>> rec = from_arrays(np.arange(n) * 0.1, xy, activity=place[:, None],
-    ...                   head_direction=np.angle(np.exp(1j * hd)), activity_kind="rate")
+    ...                   head_direction=hd, activity_kind="rate")
     >>> table = classify_cells(rec)
     >>> str(table.cell_class[0].values)
     'place'

@@ -233,7 +233,7 @@ def circular_shifts(n: int, dt: float, n_shuffles: int, seed: int | None) -> np.
         raise ValueError(f"`n_shuffles` = {n_shuffles} time-shift shuffles need a recording "
                          f"of at least 4 samples; got {n} (pass n_shuffles=0 to skip the "
                          "significance test)")
-    rng = np.random.default_rng(SHUFFLE.seed if seed is None else check_seed("seed", seed))
+    rng = np.random.default_rng(check_seed("seed", shuffle_seed(seed)))
     return rng.integers(max(low, 1), n - max(low, 1) + 1, size=n_shuffles)
 
 

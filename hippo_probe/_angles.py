@@ -22,11 +22,6 @@ def wrap_angle(angle):
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def wrap_angle_scalar(a):
-    """:func:`wrap_angle` of one float, for numba kernels.
-
-    An angle already in range skips the modulo, a library call that dominates the
-    particle filters' wall terms: for ``0 <= b < 2 pi`` the float modulo returns ``b``
-    itself, so the result is the same bit for bit."""
-    b = a + math.pi
-    r = (b if 0.0 <= b < 2.0 * math.pi else b % (2.0 * math.pi)) - math.pi
+    """:func:`wrap_angle` of one float, for numba kernels."""
+    r = (a + math.pi) % (2.0 * math.pi) - math.pi
     return r - 2.0 * math.pi if r >= math.pi else r

@@ -316,19 +316,6 @@ def _cos_sin(r):
     return c, s
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _segment_d2(ax, ay, ex, ey, inv_length2, px, py):
-    """Offset ``(rx, ry)`` of point ``(px, py)`` from a wall's start ``(ax, ay)`` and its
-    squared distance to the wall (``(ex, ey)`` the wall's vector, ``inv_length2`` one over
-    its squared length)."""
-    rx = px - ax
-    ry = py - ay
-    u = min(max((rx * ex + ry * ey) * inv_length2, 0.0), 1.0)
-    qx = rx - u * ex
-    qy = ry - u * ey
-    return rx, ry, qx * qx + qy * qy
-
-
 @numba.njit(cache=True, nogil=True)
 def _nearest_walls(walls, x, y, best, nearest, crossings):
     """Squared distance to the nearest wall, its index, and the number of walls crossed by
@@ -346,31 +333,18 @@ def _nearest_walls(walls, x, y, best, nearest, crossings):
                                        walls[k, 4])
         wall = float(k)
         for i in range(x.size):
-            rx, ry, d2 = _segment_d2(ax, ay, ex, ey, inv_length2, x[i], y[i])
+            rx = x[i] - ax
+            ry = y[i] - ay
+            u = min(max((rx * ex + ry * ey) * inv_length2, 0.0), 1.0)
+            qx = rx - u * ex
+            qy = ry - u * ey
+            d2 = qx * qx + qy * qy
             previous = best[i]
             nearest[i] = wall if d2 < previous else nearest[i]
             best[i] = min(d2, previous)
             straddles = (ry < 0.0) != (ry < ey)
             left_of = (rx * ey < ry * ex) == (ey > 0.0)
             crossings[i] += 1.0 if (straddles and left_of) else 0.0
-
-
-@numba.njit(cache=True, nogil=True)
-def _nearest_wall_only(walls, x, y, best, nearest):
-    """:func:`_nearest_walls` without the crossings (the checks inside a step need only
-    the nearest wall): the same ``best`` and ``nearest``, bit for bit, in fewer
-    operations."""
-    best[:] = np.inf
-    nearest[:] = 0.0
-    for k in range(walls.shape[0]):
-        ax, ay, ex, ey, inv_length2 = (walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3],
-                                       walls[k, 4])
-        wall = float(k)
-        for i in range(x.size):
-            d2 = _segment_d2(ax, ay, ex, ey, inv_length2, x[i], y[i])[2]
-            previous = best[i]
-            nearest[i] = wall if d2 < previous else nearest[i]
-            best[i] = min(d2, previous)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -501,8 +475,8 @@ def _filter_trial(rng, particles, walls, obs, model, outputs):
                 for a in range(n_arenas):
                     lo, hi = block[a], block[a + 1]
                     if lo < hi:
-                        _nearest_wall_only(walls[a], xm[lo:hi], ym[lo:hi],
-                                           mid_best[lo:hi], mid_nearest[lo:hi])
+                        _nearest_walls(walls[a], xm[lo:hi], ym[lo:hi], mid_best[lo:hi],
+                                       mid_nearest[lo:hi], mid_crossings[lo:hi])
                 for i in range(cur):
                     if mid_best[i] < touch_range * touch_range:
                         lik[i] *= 1.0 - towards(walls[arena[i], int(mid_nearest[i]), 7],
@@ -697,7 +671,10 @@ def _allocate(mass, n, floor, u, out):
 
 @numba.njit(cache=True, inline="always")
 def _wall_distance(wall, px, py):
-    return math.sqrt(_segment_d2(wall[0], wall[1], wall[2], wall[3], wall[4], px, py)[2])
+    rx, ry = px - wall[0], py - wall[1]
+    u = min(max((rx * wall[2] + ry * wall[3]) * wall[4], 0.0), 1.0)
+    qx, qy = rx - u * wall[2], ry - u * wall[3]
+    return math.sqrt(qx * qx + qy * qy)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -364,22 +364,3 @@ def test_drift_ranks_wrap_around_the_circle():
                             heading_drift=np.array([[np.pi - 1e-3]]))
     rank = posterior_ranks(result, batch)["drift"]
     assert abs(float(rank[0]) - 0.5) < 0.05
-
-
-def test_the_checks_inside_a_step_find_the_same_nearest_wall_bit_for_bit():
-    """The checks inside a step skip the crossing count; the nearest wall and its squared
-    distance must be those of the full geometry pass exactly."""
-    from hippo_probe.baselines.contact import wall_table
-    from hippo_probe.baselines.particle_filter import _nearest_wall_only, _nearest_walls
-    from hippo_probe.tasks import make_trials
-
-    tables = wall_table(make_trials("generalized", 4, "test", 0).arena_vertices)
-    rng = np.random.default_rng(0)
-    x, y = rng.uniform(-1.5, 1.5, 5_000), rng.uniform(-1.5, 1.5, 5_000)
-    full = [np.empty(x.size) for _ in range(3)]
-    only = [np.empty(x.size) for _ in range(2)]
-    for walls in tables:
-        _nearest_walls(walls, x, y, *full)
-        _nearest_wall_only(walls, x, y, *only)
-        np.testing.assert_array_equal(only[0], full[0])
-        np.testing.assert_array_equal(only[1], full[1])

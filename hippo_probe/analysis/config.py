@@ -142,10 +142,16 @@ class HeadDirectionConfig:
         Taube et al. 1990 used 6 degree bins) and of the real session's README.
     n_shuffles : int
         100 circular time shifts: p-values resolve to 1/101.
+    min_visited_fraction : float
+        The mean vector length (and its p-values) is NaN where the head direction visited
+        fewer than this fraction of the bins: over a short arc every curve has a long
+        mean vector, whatever the cell does (a stuck or misread sensor visits one bin and
+        gives R = 1). Half the circle.
     """
 
     n_bins: int = 60
     n_shuffles: int = 100
+    min_visited_fraction: float = 0.5
 
 
 @dataclass(frozen=True)

@@ -97,6 +97,8 @@ def _hd_lengths(rec, bins_60, shifts, scale):
     offset, why = _common.nonnegative_offset(rec, res.amin * scale, floor)
     theta = -np.pi + (np.arange(n_bins) + 0.5) * 2 * np.pi / n_bins
     length, phase = mean_vector(curves - offset[None, :, None], theta)
+    if (res.counts[0] > 0).sum() < HEAD_DIRECTION.min_visited_fraction * n_bins:
+        length[:], phase[:] = np.nan, np.nan           # too short an arc for any R
     return length, phase, why
 
 

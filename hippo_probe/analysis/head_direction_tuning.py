@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 
@@ -148,6 +150,10 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     offset, why_offset = _common.nonnegative_offset(rec, res.amin * scale, floor)
     theta = -np.pi + (np.arange(n_bins) + 0.5) * 2 * np.pi / n_bins
     length, phase = mean_vector(curves - offset[None, :, None, None], theta)
+    visited = (counts > 0).sum(axis=-1)                                  # per group
+    narrow = visited < HEAD_DIRECTION.min_visited_fraction * n_bins
+    length[..., narrow] = np.nan
+    phase[..., narrow] = np.nan
 
     squeeze = (lambda a: a[:, 0]) if dim is None else (lambda a: a)
     lead = ("unit",) if dim is None else ("unit", dim)
@@ -170,9 +176,13 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
         "units": "rad", "long_name": "preferred direction"})
     if n_shuffles:
         exceed = (length[1:] >= length[:1]).sum(axis=0)
-        out["p_value"] = (lead, squeeze((1 + exceed) / len(shifts)), {
+        p_value = np.where(np.isnan(length[0]), np.nan, (1 + exceed) / len(shifts))
+        with warnings.catch_warnings():    # a unit or group without R: NaN, said below
+            warnings.simplefilter("ignore", RuntimeWarning)
+            r95 = np.nanpercentile(length[1:], 95, axis=0)
+        out["p_value"] = (lead, squeeze(p_value), {
             "units": "1", "long_name": "fraction of time-shift shuffles with R at least as large"})
-        out["shuffle_r95"] = (lead, squeeze(np.nanpercentile(length[1:], 95, axis=0)), {
+        out["shuffle_r95"] = (lead, squeeze(r95), {
             "units": "1", "long_name": "95th percentile of shuffled mean vector length"})
     notes = {}
     if _common.is_spike_data(rec):
@@ -191,10 +201,15 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
         n_shuffles=n_shuffles, seed=_common.shuffle_seed(seed), by=by, min_speed=min_speed,
         rate_offset=why_offset, samples_without_direction=n_dir_nan,
         mean_vector="from the occupancy-normalised curve (bin centres)", **notes)
+    group_visited = np.broadcast_to(visited, length.shape[1:]).ravel()
     reasons = ["no visited direction bin" if not np.isfinite(c).any() else
-               "curve sums to 0 (after the non-negative shift)" if not np.isfinite(r) else ""
-               for c, r in zip(out["tuning_curve"].values.reshape(-1, n_bins),
-                               out["mean_vector_length"].values.ravel())]
+               f"head direction visited {k} of {n_bins} bins, fewer than "
+               f"min_visited_fraction = {HEAD_DIRECTION.min_visited_fraction:g} of them (a "
+               f"stuck or misread sensor?)" if k < HEAD_DIRECTION.min_visited_fraction * n_bins
+               else "curve sums to 0 (after the non-negative shift)" if not np.isfinite(r)
+               else ""
+               for c, r, k in zip(out["tuning_curve"].values.reshape(-1, n_bins),
+                                  out["mean_vector_length"].values.ravel(), group_visited)]
     out.attrs = _common.report_nan(attrs, _common.entry_labels(out["mean_vector_length"]),
                                    reasons, "mean vector length")
     return out

@@ -105,6 +105,12 @@ def spatial_grid(rec, bin_size=None, extent=None, *, n_bins=None, xy=None) -> Gr
             if not np.isfinite(np.r_[lo, hi]).all():
                 raise ValueError("`rec.position` has no finite sample: cannot place bins "
                                  "(all positions are NaN)")
+            for axis, a, b in (("x", lo[0], hi[0]), ("y", lo[1], hi[1])):
+                if a == b:
+                    raise ValueError(
+                        f"`rec.position`'s {axis} is constant ({a:.6g} m) over every finite "
+                        f"sample: there is no extent to place bins on (a stuck tracker, "
+                        f"or a single sample?); pass `extent=` to map it anyway")
             _warn_outliers_set_extent(x, y, lo, hi)
             pad = RATEMAP.extent_margin * np.maximum(hi - lo, 1e-12)
             extent = (lo[0] - pad[0], hi[0] + pad[0], lo[1] - pad[1], hi[1] + pad[1])

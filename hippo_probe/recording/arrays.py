@@ -75,6 +75,11 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop):
     counts = np.zeros((time.size, len(spike_times)), dtype=np.float32)
     lost = []
     for u, spikes in enumerate(spike_times):
+        if np.ndim(spikes) == 0:
+            # a flat list of times would make each time a unit of one spike
+            raise ValueError(f"`spike_times` must be a sequence of 1-D arrays, one per unit; "
+                             f"got the number {spikes!r} as spike_times[{u}] (one unit's "
+                             f"spikes: pass [times] or a 1-D numpy array)")
         spikes = check_finite(f"spike_times[{u}]", check_real(
             f"spike_times[{u}]", spikes).astype(float).ravel())
         i = np.searchsorted(left, spikes, side="right") - 1
@@ -259,9 +264,10 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
         head_direction = check_shape("head_direction", check_real(
             "head_direction", head_direction).astype(float), (n,))
         check_finite("head_direction", head_direction, allow_nan=True)
-        if np.nanmax(np.abs(head_direction), initial=0.0) > 2 * np.pi + 1e-9:
-            warnings.warn(f"`head_direction` spans up to {np.nanmax(head_direction):.4g}, "
-                          f"more than 2 pi: if it is in degrees, pass np.deg2rad(...) "
+        largest = np.nanmax(np.abs(head_direction), initial=0.0)
+        if largest > 2 * np.pi + 1e-9:
+            warnings.warn(f"`head_direction` reaches {largest:.4g} in magnitude, more than "
+                          f"2 pi: if it is in degrees, pass np.deg2rad(...) "
                           f"(unwrapped radians are fine: they are wrapped to [-pi, pi))", UserWarning,
                           stacklevel=2)
         rec["head_direction"] = "time", wrap_angle(head_direction)

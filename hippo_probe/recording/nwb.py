@@ -133,8 +133,9 @@ def _refuse_external_links(path):
     try:
         with h5py.File(path, "r") as f:
             f.visititems_links(visit)
-    except OSError as err:
-        raise RecordingError(f"`path` is not a readable NWB file: {path} ({err})") from err
+    except (OSError, RuntimeError) as err:    # h5py: RuntimeError for damaged headers
+        raise RecordingError(f"`path` is not a readable NWB file: {path} "
+                             f"({type(err).__name__}: {err})") from err
     if found:
         raise RecordingError(f"`path` {path} links to data in other files ({found[0]}"
                              f"{' and more' if len(found) > 1 else ''}): refused; only the "
@@ -191,6 +192,13 @@ def _read_position(nwb, name, floor_axes, position_units, path):
     axes = _axes_table({container.name: container} if isinstance(container, SpatialSeries)
                        else container.spatial_series)
     columns = {axis: _column(entry) for axis, entry in axes.items()}
+    # an axis without one finite value is damage (erased storage reads as NaN), not an
+    # axis that barely moves: chosen by spread, its neighbours would take its place
+    empty = [axis for axis, v in columns.items() if not np.isfinite(v).any()]
+    if empty and (floor_axes is None or set(empty) & set(floor_axes)):
+        raise RecordingError(f"position axis {empty[0]!r} in {path} ({location}) has no "
+                             f"finite value: the file is damaged (or pass `floor_axes` "
+                             f"naming two other axes of {list(axes)})")
     if floor_axes is None:      # the vertical axis of a floor-bound animal barely moves
         spread = {axis: np.nanstd(v) for axis, v in columns.items()}
         floor_axes = tuple(sorted(sorted(spread, key=spread.get)[-2:], key=list(axes).index))
@@ -467,9 +475,14 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
         raise RecordingError(f"`path` is not a readable NWB file: {path} "
                              f"({type(err).__name__}: {err})") from err
     with io:
-        return _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction,
-                         head_direction_sign, position, position_units, environment,
-                         activity, config)
+        try:
+            return _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction,
+                             head_direction_sign, position, position_units, environment,
+                             activity, config)
+        except (OSError, RuntimeError) as err:
+            # h5py reads lazily: a damaged dataset surfaces here, as its own errors
+            raise RecordingError(f"`path` is a damaged NWB file: {path} "
+                                 f"({type(err).__name__}: {err})") from err
 
 
 def _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction, head_direction_sign,
@@ -581,10 +594,17 @@ def _read_activity(nwb, activity, keep, time, index, starts, stops, path):
     # each unit's spikes are the slice between consecutive index entries: an index that
     # goes back would hand spikes of one unit to another
     ends = np.asarray(_read(units["spike_times"].data, "the Units table's spike index"))
+    n_spikes = len(units["spike_times"].target.data)
     if (np.diff(ends.astype(np.int64)) < 0).any() or (ends.size and ends[0] < 0) or (
-            ends.size and ends[-1] > len(units["spike_times"].target.data)):
+            ends.size and ends[-1] > n_spikes):
         raise RecordingError(f"the Units table's `spike_times_index` in {path} is not "
                              f"non-decreasing within the spike times: the file is damaged")
+    if ends.size and ends[-1] != n_spikes:
+        # a ragged column's index ends at its data's end: spikes after it belong to no unit
+        raise RecordingError(f"the Units table's `spike_times_index` in {path} ends at "
+                             f"{int(ends[-1])} of its {n_spikes} spike times: "
+                             f"{n_spikes - int(ends[-1])} spikes belong to no unit; the "
+                             f"file is damaged")
     spikes = [np.asarray(units["spike_times"][i], dtype=float) for i in range(len(units))]
     negative = sum(int((s < 0).sum()) for s in spikes)
     if negative:

@@ -122,13 +122,28 @@ def _write(rec, store, config, storage_options=None):
                          write_empty_chunks=True, storage_options=storage_options,
                          encoding=_encoding(prepared, time_chunk, config))
     group = zarr.open_group(store, mode="r+", storage_options=storage_options)
-    nchunks = {name: int(array.nchunks) for name, array in group.arrays()}
+    arrays = dict(group.arrays())
+    nchunks = {name: int(array.nchunks) for name, array in arrays.items()}
     # store_id: which save this is, so that a lazy reader can tell the store it opened
     # from one saved over it later (StoreGuard)
-    marker = {"complete": True, "nchunks": nchunks, "store_id": uuid.uuid4().hex}
+    marker = {"complete": True, "nchunks": nchunks, "store_id": uuid.uuid4().hex,
+              "layout": {name: _layout(array) for name, array in arrays.items()}}
     if not _is_url(os.fspath(store)):
         marker["chunk_digest"] = _chunk_digests(Path(store), list(nchunks))
     group.attrs[COMPLETE_MARKER] = marker
+
+
+#: The parts of an array's metadata that decide what its bytes mean: recorded in the
+#: completion marker, so that an edited shape, type or byte order is refused on opening
+#: (the chunks' checksums cover only their bytes). Attributes may change (see StoreGuard).
+_LAYOUT_KEYS = ("shape", "data_type", "chunk_grid", "chunk_key_encoding", "codecs",
+                "dimension_names")
+
+
+def _layout(array) -> dict:
+    """``array``'s :data:`_LAYOUT_KEYS` as plain JSON values."""
+    meta = array.metadata.to_dict()
+    return json.loads(json.dumps({k: meta.get(k) for k in _LAYOUT_KEYS}, default=str))
 
 
 def _chunk_digests(root: Path, names) -> dict:
@@ -260,12 +275,28 @@ def _check_complete(path, storage_options):
     if not isinstance(marker, dict) or not marker.get("complete"):
         raise RecordingError(f"`path` holds a half-written or foreign zarr store: {label} "
                              "(no completion marker; save_recording writes it last)")
+    layouts = marker.get("layout")
     for name, expected in marker.get("nchunks", {}).items():
         try:
-            found = group[name].nchunks_initialized
+            array = group[name]
+            claimed = array.nchunks       # from the metadata's shape: nothing allocated
+            written = _layout(array) if isinstance(layouts, dict) else None
+            found = array.nchunks_initialized if claimed == expected else None
         except Exception as err:
             raise RecordingError(f"`path` is a corrupt store: array `{name}` cannot be "
                                  f"opened in {label} ({type(err).__name__}: {err})") from err
+        if claimed != expected:
+            raise RecordingError(
+                f"`path` is a corrupt or altered store: the metadata of array `{name}` in "
+                f"{label} claims shape {tuple(array.shape)}, {claimed} chunks, where "
+                f"{expected} were written; refused before reading it")
+        if written is not None and written != layouts.get(name):
+            changed = sorted(k for k in _LAYOUT_KEYS
+                             if written.get(k) != (layouts.get(name) or {}).get(k))
+            raise RecordingError(
+                f"`path` is a corrupt or altered store: the metadata of array `{name}` in "
+                f"{label} differs from what was written in {', '.join(changed)} (now "
+                + "; ".join(f"{k}={written.get(k)!r}" for k in changed) + ")")
         if found != expected:
             raise RecordingError(f"`path` is a corrupt store: array `{name}` has {found} of "
                                  f"its {expected} chunks in {label}")
@@ -355,9 +386,24 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     except RecordingError:
         raise
     except Exception as err:
-        raise RecordingError(f"`path` is a corrupt store: {os.fspath(path)} "
-                             f"({type(err).__name__}: {err})") from err
+        name = _unreadable_array(path, storage_options)
+        which = f"array `{name}` of " if name else ""
+        raise RecordingError(f"`path` is a corrupt store: {which}{os.fspath(path)} cannot be "
+                             f"read ({type(err).__name__}: {err})") from err
     return validate(rec)
+
+
+def _unreadable_array(path, storage_options, max_bytes=2 ** 28):
+    """The first array of the store (up to ``max_bytes``: the coords read on opening)
+    that fails to read, to name it in the error; None if none does."""
+    group = zarr.open_group(path, mode="r", storage_options=storage_options)
+    for name, array in group.arrays():
+        if array.nbytes <= max_bytes:
+            try:
+                array[...]
+            except Exception:
+                return name
+    return None
 
 
 def _signature(path):

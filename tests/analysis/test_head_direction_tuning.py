@@ -107,3 +107,27 @@ def test_bad_input():
         res = hp.head_direction_tuning(zero, n_shuffles=0)
     assert np.isnan(res.mean_vector_length).all()
     assert "sums to 0" in res.attrs["nan_reasons"]["unit=0"]
+
+
+@pytest.mark.parametrize("stuck", [[0.5], [0.5, 0.6]])
+def test_a_stuck_sensor_gives_no_mean_vector_length(stuck):
+    """A head direction stuck at one or two values visits one or two bins: every curve
+    then has R near 1 (and a tiny Rayleigh p) whatever the cell does. No number, and the
+    reason, instead."""
+    rec = hd_cell_recording(PREFERRED[:2], KAPPA[:2], n_samples=5000)
+    rec["head_direction"][:] = np.resize(stuck, rec.sizes["time"])
+    with pytest.warns(AnalysisWarning, match="visited 1 of 60 bins|visited 2 of 60 bins"):
+        res = hp.head_direction_tuning(rec, n_shuffles=10)
+    assert np.isnan(res.mean_vector_length.values).all()
+    assert np.isnan(res.preferred_direction.values).all()
+    assert np.isnan(res.p_value.values).all()
+    assert "stuck or misread sensor" in str(res.attrs["nan_reasons"])
+
+
+def test_half_the_circle_visited_still_gives_a_length():
+    """The coverage rule is half the bins: a trajectory over 200 degrees keeps its R."""
+    rec = hd_cell_recording(PREFERRED[:2], KAPPA[:2], n_samples=5000)
+    hd = rec.head_direction.values
+    rec["head_direction"][:] = hd * (200 / 360)          # [-100, 100) degrees
+    res = hp.head_direction_tuning(rec, n_shuffles=0)
+    assert np.isfinite(res.mean_vector_length.values).all()

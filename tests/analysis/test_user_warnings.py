@@ -118,3 +118,11 @@ def test_the_shared_shuffle_docs_state_the_configured_minimum_shift():
     from hippo_probe.analysis.config import SHUFFLE
 
     assert f"``SHUFFLE.min_shift`` ({SHUFFLE.min_shift:g}) s" in DOCS["n_shuffles"]
+
+
+def test_a_constant_position_is_blamed_not_an_extent_never_given():
+    t = np.arange(200) * 0.1
+    xy = np.c_[np.full(200, 0.2), np.linspace(-0.4, 0.4, 200)]
+    rec = from_arrays(t, xy, activity=np.random.default_rng(0).random((200, 2)))
+    with pytest.raises(ValueError, match=r"`rec.position`'s x is constant \(0.2 m\)"):
+        hp.ratemaps(rec)

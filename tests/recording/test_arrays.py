@@ -106,3 +106,15 @@ def test_trial_aligned_chunks_never_straddle_trials():
     assert chunks == (5, 5, 8, 8, 4, 6, 8, 1)
     assert not is_trial_aligned(trial, (4, 7, 9, 12, 11))
     assert_trial_aligned(trial, chunks)
+
+
+def test_a_flat_list_of_spike_times_is_refused_not_read_as_many_units():
+    """[0.1, 0.5, ...] is one unit's spikes or a mistake; read as a sequence of units it
+    would be one unit per spike, each perfectly 'tuned'."""
+    t = np.arange(100) * 0.1
+    xy = np.c_[np.linspace(0, 1, 100), np.zeros(100) + np.linspace(0, 0.1, 100)]
+    with pytest.raises(ValueError, match=r"`spike_times` must be a sequence of 1-D arrays.*"
+                                         r"spike_times\[0\]"):
+        from_arrays(t, xy, spike_times=[0.15, 0.42, 3.3])
+    one = from_arrays(t, xy, spike_times=np.array([0.15, 0.42, 3.3]))
+    assert one.sizes["unit"] == 1 and one.activity.sum() == 3

@@ -196,3 +196,44 @@ def test_cli_import(tmp_path, capsys):
     assert open_recording(dest).sizes["unit"] == 15
     assert cli(["import-nwb", str(NWB_PATH), str(dest)]) == 2
     assert "already exists" in capsys.readouterr().err
+
+
+def _damaged_copy(tmp_path, damage):
+    """A copy of the session with ``damage(h5py.File)`` applied to it."""
+    import shutil
+
+    import h5py
+
+    path = tmp_path / "damaged.nwb"
+    shutil.copy(NWB_PATH, path)
+    with h5py.File(path, "r+") as f:
+        damage(f)
+    return path
+
+
+def test_an_erased_position_axis_is_refused_not_replaced(tmp_path):
+    """An axis read as all NaN (erased storage) must not let the vertical axis take its
+    place among the floor axes (which also turns the head direction's axis)."""
+    def erase_x(f):
+        f["acquisition/Position/x/data"][:] = np.nan
+    path = _damaged_copy(tmp_path, erase_x)
+    with pytest.raises(RecordingError, match="position axis 'x' .* no finite value"):
+        from_nwb(path, epoch="wake")
+    rec = from_nwb(path, epoch="wake", floor_axes=("y", "z"), position_units="m")
+    assert rec.attrs["nwb_floor_axes"] == ["y", "z"]
+
+
+def test_spikes_left_outside_the_units_index_are_refused(tmp_path):
+    def cut_last_unit(f):
+        f["units/spike_times_index"][-1] -= 100
+    with pytest.raises(RecordingError, match="100 spikes belong to no unit"):
+        from_nwb(_damaged_copy(tmp_path, cut_last_unit), epoch="wake", position_units="m")
+
+
+def test_a_damaged_hdf5_file_is_a_recording_error_naming_it(tmp_path):
+    path = tmp_path / "tail.nwb"
+    data = bytearray(NWB_PATH.read_bytes())
+    data[-(1 << 20):] = bytes(1 << 20)                 # the last MiB zeroed
+    path.write_bytes(bytes(data))
+    with pytest.raises(RecordingError, match="tail.nwb"):
+        from_nwb(path, epoch="wake")

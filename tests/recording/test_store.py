@@ -138,6 +138,55 @@ def test_garbled_metadata_is_refused(saved):
         open_recording(saved)
 
 
+def _edit_array_metadata(store, name, edit):
+    path = store / name / "zarr.json"
+    meta = json.loads(path.read_text())
+    edit(meta)
+    path.write_text(json.dumps(meta))
+
+
+def test_a_shape_claimed_beyond_the_chunks_written_is_refused_before_reading(saved):
+    """A header that claims more samples than were written must not make the reader
+    allocate them (a billion samples of time would be 8 GB)."""
+    n = json.loads((saved / "time" / "zarr.json").read_text())["shape"][0]
+
+    def grow(meta):
+        meta["shape"][0] = 10 ** 9
+    _edit_array_metadata(saved, "time", grow)
+    with pytest.raises(RecordingError, match=r"array `time`.*claims shape \(1000000000,\)"):
+        open_recording(saved)
+    assert n < 10 ** 9
+
+
+def test_a_shape_cut_within_the_chunks_is_refused(saved):
+    """Samples cut from the end of every per-sample array (the chunk count unchanged) would
+    open as a shorter, valid-looking recording."""
+    def cut(meta):
+        meta["shape"][0] -= 5
+    for name in ("time", "trial", "trial_time", "environment", "position", "activity"):
+        if (saved / name).is_dir():
+            _edit_array_metadata(saved, name, cut)
+    with pytest.raises(RecordingError, match="differs from what was written in shape"):
+        open_recording(saved)
+
+
+def test_a_byte_order_edit_is_refused(saved):
+    """The chunks' checksums cover their bytes, not how to read them: big-endian floats
+    read from little-endian bytes are plausible tiny numbers."""
+    def big_endian(meta):
+        meta["codecs"][0]["configuration"]["endian"] = "big"
+    _edit_array_metadata(saved, "activity", big_endian)
+    with pytest.raises(RecordingError, match="array `activity`.*differs.*codecs"):
+        open_recording(saved)
+
+
+def test_an_attribute_edit_still_opens(saved):
+    """Attributes are not the layout: a unit label set on an array is the same store."""
+    _edit_array_metadata(saved, "activity",
+                         lambda m: m.setdefault("attributes", {}).update(note="checked"))
+    assert open_recording(saved).activity.attrs["note"] == "checked"
+
+
 def test_corrupted_chunk_fails_its_checksum(saved):
     chunk = _first_chunk(saved, "activity")
     data = bytearray(chunk.read_bytes())
@@ -173,3 +222,13 @@ def test_saving_dask_chunked_along_units(network_recording, tmp_path):
     lazy = network_recording.chunk({"time": 37, "unit": 5})
     save_recording(lazy, tmp_path / "r.zarr")
     xr.testing.assert_identical(open_recording(tmp_path / "r.zarr").load(), network_recording)
+
+
+def test_a_corrupted_coordinate_chunk_is_named(saved):
+    """Coords are read on opening: a bad chunk there fails open_recording, naming it."""
+    chunk = _first_chunk(saved, "time")
+    data = bytearray(chunk.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    chunk.write_bytes(bytes(data))
+    with pytest.raises(RecordingError, match="array `time` of .* cannot be read"):
+        open_recording(saved)

@@ -99,6 +99,32 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop):
     return counts
 
 
+#: Share of a unit's spikes beyond the samples' span above which ``from_arrays`` warns.
+BEYOND_SAMPLES_WARNING = 0.5
+
+
+def _warn_spikes_beyond_samples(spike_times, time):
+    """Warn when most of a unit's spikes fall before the first sample or after the last
+    (``bin_spikes`` warns only when all of them fall outside the trials): tracking
+    shorter than the spikes, or another clock, would otherwise give a plausible map from
+    the few spikes left. Spikes between trials are dropped by design, unwarned."""
+    worst = None
+    for u, spikes in enumerate(spike_times):
+        spikes = np.asarray(spikes, dtype=float).ravel()
+        beyond = int(((spikes < time[0]) | (spikes > time[-1])).sum())
+        # every spike lost: bin_spikes has said so
+        if BEYOND_SAMPLES_WARNING * spikes.size < beyond < spikes.size and (
+                worst is None or beyond / spikes.size > worst[1] / worst[2]):
+            worst = (u, beyond, spikes.size)
+    if worst is not None:
+        u, beyond, n = worst
+        warnings.warn(f"{beyond} of the {n} spikes of unit index {u} fall before the first "
+                      f"sample or after the last ([{time[0]:.6g}, {time[-1]:.6g}] s) and "
+                      f"are not counted (the unit that loses the largest share): is the "
+                      f"tracking shorter than the spikes, or on another clock?",
+                      UserWarning, stacklevel=3)
+
+
 def _unit_coords(unit, n_units):
     """Unit ids and extra unit coords from ``None``, ids, or a table of columns."""
     if unit is None:
@@ -240,6 +266,7 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
             spike_times = [spike_times] if spike_times.ndim == 1 else list(spike_times)
         values = bin_spikes(spike_times, time, trial, table["trial_start"],
                             table["trial_stop"])
+        _warn_spikes_beyond_samples(spike_times, time)
         attrs.setdefault("activity_kind", "spike_count")
     else:
         activity = check_real("activity", activity)

@@ -1,4 +1,5 @@
 """from_arrays, spike binning and the per-trial helpers."""
+import warnings
 
 import numpy as np
 import pytest
@@ -118,3 +119,17 @@ def test_a_flat_list_of_spike_times_is_refused_not_read_as_many_units():
         from_arrays(t, xy, spike_times=[0.15, 0.42, 3.3])
     one = from_arrays(t, xy, spike_times=np.array([0.15, 0.42, 3.3]))
     assert one.sizes["unit"] == 1 and one.activity.sum() == 3
+
+
+def test_a_unit_losing_most_of_its_spikes_beyond_the_samples_is_warned_about():
+    """Spikes beyond the tracking are not counted (documented); when they are most of a
+    unit's, the map would rest on the few left, so say so."""
+    t = np.arange(400) * 0.1                                     # 0 to 39.9 s
+    xy = np.c_[np.linspace(0, 1, 400), np.linspace(0, 0.5, 400)]
+    inside, after = np.linspace(1, 30, 10), np.linspace(45, 80, 400)
+    with pytest.warns(UserWarning, match=r"400 of the 410 spikes of unit index 1"):
+        rec = from_arrays(t, xy, spike_times=[inside, np.r_[inside, after]])
+    assert rec.activity.sum("time").values.tolist() == [10, 10]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                           # a few beyond: quiet
+        from_arrays(t, xy, spike_times=[np.r_[inside, 45.0]])

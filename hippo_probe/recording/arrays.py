@@ -172,7 +172,10 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
         Activity per sample (finite); stored as float32. Give this or ``spike_times``.
     spike_times : sequence of 1-D arrays, optional
         Spike times (s) of each unit, binned onto the samples by :func:`bin_spikes`
-        (nearest sample within its trial); ``activity_kind`` becomes ``"spike_count"``.
+        (nearest sample within its trial; spikes outside every trial are not counted,
+        with a warning when most of a unit's fall before the first sample or after the
+        last); ``activity_kind`` becomes ``"spike_count"``. One unit's spikes: a 1-D
+        array, or ``[times]``.
     head_direction : (n,) float, optional
         Radians, allocentric, 0 = +x, counter-clockwise; wrapped into [-pi, pi); NaN
         allowed.

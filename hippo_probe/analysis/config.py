@@ -142,16 +142,19 @@ class HeadDirectionConfig:
         Taube et al. 1990 used 6 degree bins) and of the real session's README.
     n_shuffles : int
         100 circular time shifts: p-values resolve to 1/101.
-    min_visited_fraction : float
-        The mean vector length (and its p-values) is NaN where the head direction visited
-        fewer than this fraction of the bins: over a short arc every curve has a long
-        mean vector, whatever the cell does (a stuck or misread sensor visits one bin and
-        gives R = 1). Half the circle.
+    max_unvisited_arc : float
+        Degrees. The mean vector length (and its p-values) is NaN where the head
+        direction left an arc of unvisited bins longer than this, i.e. where every
+        direction visited lies within a shorter arc: over a short arc every curve has a
+        long mean vector, whatever the cell does (a stuck or misread sensor visits one
+        bin and gives R = 1). Half the circle. Sparse but spread headings (a few discrete
+        directions, a coarsely quantised tracker) keep their R. Over half the circle an
+        untuned curve still reads R up to 2/pi; the shuffles' p-values account for it.
     """
 
     n_bins: int = 60
     n_shuffles: int = 100
-    min_visited_fraction: float = 0.5
+    max_unvisited_arc: float = 180.0
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,8 @@ from ._common import AnalysisWarning
 from ._common import shifts_for
 from ._shuffles import add_significance, check_percentile
 from .config import CELL_CLASS, CONJUNCTIVE, HEAD_DIRECTION
-from .head_direction_tuning import direction_bins, mean_vector
+from .head_direction_tuning import (direction_bins, mean_vector, narrow_reason,
+                                    unvisited_arc)
 from .ratemaps import _positions, position_bins, spatial_grid, tuning_sums
 from .spatial_information import skaggs_information
 from .._docs import fill_doc
@@ -97,9 +98,10 @@ def _hd_lengths(rec, bins_60, shifts, scale):
     offset, why = _common.nonnegative_offset(rec, res.amin * scale, floor)
     theta = -np.pi + (np.arange(n_bins) + 0.5) * 2 * np.pi / n_bins
     length, phase = mean_vector(curves - offset[None, :, None], theta)
-    if (res.counts[0] > 0).sum() < HEAD_DIRECTION.min_visited_fraction * n_bins:
-        length[:], phase[:] = np.nan, np.nan           # too short an arc for any R
-    return length, phase, why
+    arc = float(unvisited_arc(res.counts[0]))
+    if arc > HEAD_DIRECTION.max_unvisited_arc:        # as head_direction_tuning
+        length[:], phase[:] = np.nan, np.nan
+    return length, phase, why, arc
 
 
 def conjunctive_arrays(rec, *, n_shuffles, seed, n_bins, n_dir, min_speed, extent):
@@ -127,7 +129,9 @@ def conjunctive_arrays(rec, *, n_shuffles, seed, n_bins, n_dir, min_speed, exten
             bins_60[~(_common.speed(rec) >= min_speed)] = -1
     scale = _common.rate_scale(rec)[0]
 
-    hd_len, hd_phase, why = _hd_lengths(rec, bins_60, shifts, scale)
+    hd_len, hd_phase, why, hd_arc = _hd_lengths(rec, bins_60, shifts, scale)
+    # the direction factor over too short an arc is as long as the raw curve would be
+    d_arc = float(unvisited_arc(np.bincount(d_bins[valid], minlength=n_dir)))
     length_parts, info_parts, phase0 = [], [], None
     theta = -np.pi + (np.arange(n_dir) + 0.5) * 2 * np.pi / n_dir
     f0 = g0 = None
@@ -149,6 +153,8 @@ def conjunctive_arrays(rec, *, n_shuffles, seed, n_bins, n_dir, min_speed, exten
         sums = np.maximum(sums, 0.0)       # round-off below 0 after the shift
         f, g, _ = factorize(sums, counts, CONJUNCTIVE.n_iterations, CONJUNCTIVE.tolerance)
         length, phase = mean_vector(g, theta)
+        if d_arc > HEAD_DIRECTION.max_unvisited_arc:
+            length[:], phase[:] = np.nan, np.nan
         info, _ = skaggs_information(f, counts.sum(0), axes=(-1,))
         if start == 0:
             f0, g0, phase0 = f[0], g[0], phase[0]
@@ -158,7 +164,8 @@ def conjunctive_arrays(rec, *, n_shuffles, seed, n_bins, n_dir, min_speed, exten
     info = np.concatenate(info_parts)
 
     return dict(hd_len=hd_len, hd_phase=hd_phase, length=length, info=info, f0=f0, g0=g0,
-                phase0=phase0, theta=theta, grid=grid, dropped=dropped, why=why)
+                phase0=phase0, theta=theta, grid=grid, dropped=dropped, why=why,
+                hd_arc=hd_arc, d_arc=d_arc)
 
 
 @fill_doc
@@ -187,7 +194,8 @@ def conjunctive_tuning(rec, *, n_shuffles=None, seed=None, percentile=None, thre
     Activity is made a non-negative rate first (signed activity: minus the unit's minimum
     over the recording), as R, information and the model need. Significance: circular
     time shifts of the activity against the behaviour; thresholds are the shuffles'
-    ``percentile`` (default 99th).
+    ``percentile`` (default 99th). Both lengths are NaN where the head direction left more
+    than half the circle unvisited, as in :func:`head_direction_tuning`.
 
     Parameters
     ----------
@@ -297,8 +305,13 @@ def conjunctive_tuning(rec, *, n_shuffles=None, seed=None, percentile=None, thre
         samples_dropped=str(dropped), rate_offset=why,
         definition="lambda(x, theta) = f(x) g(theta), maximum likelihood (Burgess et al. "
                    "2005); HD curve as head_direction_tuning (60 bins, unsmoothed)")
-    reasons = ["activity is constant (after the non-negative shift)" if not np.isfinite(v)
-               else "" for v in length[0]]
+    limit = HEAD_DIRECTION.max_unvisited_arc
+    hd_why = narrow_reason(arr["hd_arc"]) if arr["hd_arc"] > limit else "curve sums to 0"
+    d_why = (narrow_reason(arr["d_arc"]) if arr["d_arc"] > limit
+             else "activity is constant (after the non-negative shift)")
+    reasons = ["; ".join(([f"R: {hd_why}"] if not np.isfinite(r) else [])
+                         + ([f"direction factor: {d_why}"] if not np.isfinite(v) else []))
+               for r, v in zip(hd_len[0], length[0])]
     out.attrs = _common.report_nan(attrs, _common.entry_labels(out["pxd_direction_length"]),
-                                   reasons, "direction-factor length")
+                                   reasons, "head-direction or direction-factor length")
     return out

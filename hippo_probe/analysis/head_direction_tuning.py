@@ -41,6 +41,38 @@ def mean_vector(curves, theta):
     return np.abs(z), np.angle(z)
 
 
+def unvisited_arc(counts):
+    """The longest circular run of unvisited bins of each direction histogram
+    ``counts (..., n_bins)``, in degrees (360 where no bin is visited)."""
+    visited = np.asarray(counts) > 0
+    n_bins = visited.shape[-1]
+    flat = visited.reshape(-1, n_bins)
+    longest = np.empty(len(flat))
+    for k, row in enumerate(flat):
+        if not row.any():
+            longest[k] = n_bins
+            continue
+        # start after a visited bin so that no run wraps around the end
+        row = np.roll(row, -(int(np.flatnonzero(row)[-1]) + 1))
+        edges = np.flatnonzero(np.diff(np.r_[1, row.astype(np.int8), 1]))
+        runs = edges[1::2] - edges[::2]            # lengths of the runs of False
+        longest[k] = runs.max() if runs.size else 0
+    return (longest * 360.0 / n_bins).reshape(visited.shape[:-1])
+
+
+def too_narrow(counts):
+    """Where ``counts (..., n_bins)`` leaves an unvisited arc longer than
+    ``HEAD_DIRECTION.max_unvisited_arc``: no mean vector length there."""
+    return unvisited_arc(counts) > HEAD_DIRECTION.max_unvisited_arc
+
+
+def narrow_reason(arc):
+    """Why a mean vector length is NaN under the coverage rule."""
+    return (f"head direction left {arc:.0f} degrees unvisited, more than "
+            f"max_unvisited_arc = {HEAD_DIRECTION.max_unvisited_arc:g} (a stuck or misread "
+            f"sensor?)")
+
+
 def rayleigh_p(n, r):
     """Rayleigh test p-value for ``n`` independent angles with resultant length ``r``.
 
@@ -73,6 +105,12 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     ignores). For spike counts the Rayleigh test is also given, with the curve's R and
     n = the number of spikes (the raw spike directions would inherit the trajectory's
     uneven sampling of directions).
+
+    Where the head direction left an arc of more than
+    ``HeadDirectionConfig.max_unvisited_arc`` (180 degrees) unvisited, every direction
+    visited lies within a shorter arc and any curve has a long mean vector (a stuck
+    sensor gives R = 1): the length, the preferred direction and the p-values are NaN
+    there, with the reason in ``attrs['nan_reasons']``.
 
     Parameters
     ----------
@@ -150,8 +188,8 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     offset, why_offset = _common.nonnegative_offset(rec, res.amin * scale, floor)
     theta = -np.pi + (np.arange(n_bins) + 0.5) * 2 * np.pi / n_bins
     length, phase = mean_vector(curves - offset[None, :, None, None], theta)
-    visited = (counts > 0).sum(axis=-1)                                  # per group
-    narrow = visited < HEAD_DIRECTION.min_visited_fraction * n_bins
+    gap = unvisited_arc(counts)                                          # per group
+    narrow = gap > HEAD_DIRECTION.max_unvisited_arc
     length[..., narrow] = np.nan
     phase[..., narrow] = np.nan
 
@@ -201,15 +239,13 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
         n_shuffles=n_shuffles, seed=_common.shuffle_seed(seed), by=by, min_speed=min_speed,
         rate_offset=why_offset, samples_without_direction=n_dir_nan,
         mean_vector="from the occupancy-normalised curve (bin centres)", **notes)
-    group_visited = np.broadcast_to(visited, length.shape[1:]).ravel()
+    group_gap = np.broadcast_to(gap, length.shape[1:]).ravel()
     reasons = ["no visited direction bin" if not np.isfinite(c).any() else
-               f"head direction visited {k} of {n_bins} bins, fewer than "
-               f"min_visited_fraction = {HEAD_DIRECTION.min_visited_fraction:g} of them (a "
-               f"stuck or misread sensor?)" if k < HEAD_DIRECTION.min_visited_fraction * n_bins
+               narrow_reason(g) if g > HEAD_DIRECTION.max_unvisited_arc
                else "curve sums to 0 (after the non-negative shift)" if not np.isfinite(r)
                else ""
-               for c, r, k in zip(out["tuning_curve"].values.reshape(-1, n_bins),
-                                  out["mean_vector_length"].values.ravel(), group_visited)]
+               for c, r, g in zip(out["tuning_curve"].values.reshape(-1, n_bins),
+                                  out["mean_vector_length"].values.ravel(), group_gap)]
     out.attrs = _common.report_nan(attrs, _common.entry_labels(out["mean_vector_length"]),
                                    reasons, "mean vector length")
     return out

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import datetime
 import json
+import os
 import uuid
 import warnings
 
@@ -142,6 +143,15 @@ def _refuse_external_links(path):
                              f"file given is read")
 
 
+def _raised_in_h5py(err) -> bool:
+    """Whether ``err`` was raised inside h5py (a read of the file), not by other code."""
+    import traceback
+
+    frames = traceback.extract_tb(err.__traceback__)
+    # h5py's compiled modules report themselves as "h5py/....pyx"
+    return bool(frames) and "h5py" in frames[-1].filename.replace(os.sep, "/").split("/")
+
+
 def _timestamps(series):
     if series.timestamps is not None:
         return np.asarray(_read(series.timestamps, f"`{series.name}.timestamps`"),
@@ -196,9 +206,12 @@ def _read_position(nwb, name, floor_axes, position_units, path):
     # axis that barely moves: chosen by spread, its neighbours would take its place
     empty = [axis for axis, v in columns.items() if not np.isfinite(v).any()]
     if empty and (floor_axes is None or set(empty) & set(floor_axes)):
+        others = [a for a in axes if a not in empty]
+        hint = (f"; if it was never tracked, pass floor_axes={tuple(others[:2])!r} (or two "
+                f"other axes of {others})" if len(others) >= 2 else "")
         raise RecordingError(f"position axis {empty[0]!r} in {path} ({location}) has no "
-                             f"finite value: the file is damaged (or pass `floor_axes` "
-                             f"naming two other axes of {list(axes)})")
+                             f"finite value: the file is damaged, or the axis was not "
+                             f"tracked{hint}")
     if floor_axes is None:      # the vertical axis of a floor-bound animal barely moves
         spread = {axis: np.nanstd(v) for axis, v in columns.items()}
         floor_axes = tuple(sorted(sorted(spread, key=spread.get)[-2:], key=list(axes).index))
@@ -480,7 +493,9 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
                              head_direction_sign, position, position_units, environment,
                              activity, config)
         except (OSError, RuntimeError) as err:
-            # h5py reads lazily: a damaged dataset surfaces here, as its own errors
+            # h5py reads lazily: a damaged dataset surfaces here, as h5py's own errors
+            if not _raised_in_h5py(err):
+                raise
             raise RecordingError(f"`path` is a damaged NWB file: {path} "
                                  f"({type(err).__name__}: {err})") from err
 

@@ -127,23 +127,30 @@ def _write(rec, store, config, storage_options=None):
     # store_id: which save this is, so that a lazy reader can tell the store it opened
     # from one saved over it later (StoreGuard)
     marker = {"complete": True, "nchunks": nchunks, "store_id": uuid.uuid4().hex,
-              "layout": {name: _layout(array) for name, array in arrays.items()}}
+              "layouts": {name: _layout(array) for name, array in arrays.items()}}
     if not _is_url(os.fspath(store)):
         marker["chunk_digest"] = _chunk_digests(Path(store), list(nchunks))
     group.attrs[COMPLETE_MARKER] = marker
 
 
-#: The parts of an array's metadata that decide what its bytes mean: recorded in the
-#: completion marker, so that an edited shape, type or byte order is refused on opening
-#: (the chunks' checksums cover only their bytes). Attributes may change (see StoreGuard).
-_LAYOUT_KEYS = ("shape", "data_type", "chunk_grid", "chunk_key_encoding", "codecs",
-                "dimension_names")
-
-
 def _layout(array) -> dict:
-    """``array``'s :data:`_LAYOUT_KEYS` as plain JSON values."""
+    """What decides how ``array``'s bytes read as values, recorded in the completion marker
+    so that an edited shape, type or byte order is refused on opening (the chunks'
+    checksums cover only their bytes): shape, chunk shape, data type, byte order, the
+    codecs' names and the dimension names. Plain values that the zarr versions this
+    package supports all give alike (not their metadata's serialisation, which differs
+    between them); attributes may change (see StoreGuard)."""
     meta = array.metadata.to_dict()
-    return json.loads(json.dumps({k: meta.get(k) for k in _LAYOUT_KEYS}, default=str))
+    codecs = [c if isinstance(c, dict) else c.to_dict() for c in meta.get("codecs") or []]
+    endian = next((c.get("configuration", {}).get("endian") for c in codecs
+                   if c.get("name") == "bytes"), None)
+    dtype = np.dtype(array.dtype)
+    return {"shape": [int(n) for n in array.shape], "chunks": [int(n) for n in array.chunks],
+            # variable-length strings are typed differently by zarr 3.0 and 3.1
+            "dtype": "text" if dtype.kind in "OTUS" else dtype.name,
+            "byte_order": None if endian is None else str(endian),
+            "codecs": [str(c.get("name")) for c in codecs],
+            "dimension_names": [str(d) for d in meta.get("dimension_names") or []]}
 
 
 def _chunk_digests(root: Path, names) -> dict:
@@ -275,7 +282,7 @@ def _check_complete(path, storage_options):
     if not isinstance(marker, dict) or not marker.get("complete"):
         raise RecordingError(f"`path` holds a half-written or foreign zarr store: {label} "
                              "(no completion marker; save_recording writes it last)")
-    layouts = marker.get("layout")
+    layouts = marker.get("layouts")
     for name, expected in marker.get("nchunks", {}).items():
         try:
             array = group[name]
@@ -290,13 +297,16 @@ def _check_complete(path, storage_options):
                 f"`path` is a corrupt or altered store: the metadata of array `{name}` in "
                 f"{label} claims shape {tuple(array.shape)}, {claimed} chunks, where "
                 f"{expected} were written; refused before reading it")
-        if written is not None and written != layouts.get(name):
-            changed = sorted(k for k in _LAYOUT_KEYS
-                             if written.get(k) != (layouts.get(name) or {}).get(k))
+        was = layouts.get(name) if written is not None else None
+        if written is not None and written != was:
+            was = was if isinstance(was, dict) else {}
+            changed = sorted(k for k in written.keys() | was.keys()
+                             if written.get(k) != was.get(k))
             raise RecordingError(
                 f"`path` is a corrupt or altered store: the metadata of array `{name}` in "
-                f"{label} differs from what was written in {', '.join(changed)} (now "
-                + "; ".join(f"{k}={written.get(k)!r}" for k in changed) + ")")
+                f"{label} differs from what was written: "
+                + "; ".join(f"{k} {was.get(k)!r} written, now {written.get(k)!r}"
+                            for k in changed))
         if found != expected:
             raise RecordingError(f"`path` is a corrupt store: array `{name}` has {found} of "
                                  f"its {expected} chunks in {label}")
@@ -393,16 +403,24 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     return validate(rec)
 
 
-def _unreadable_array(path, storage_options, max_bytes=2 ** 28):
-    """The first array of the store (up to ``max_bytes``: the coords read on opening)
-    that fails to read, to name it in the error; None if none does."""
-    group = zarr.open_group(path, mode="r", storage_options=storage_options)
-    for name, array in group.arrays():
-        if array.nbytes <= max_bytes:
+def _unreadable_array(path, storage_options):
+    """The first coordinate of a local store (what opening reads) that fails to read, to
+    name it in the error; None if none does, for a URL, or if the store cannot tell."""
+    if _is_url(os.fspath(path)):
+        return None
+    try:
+        group = zarr.open_group(path, mode="r", storage_options=storage_options)
+        arrays = dict(group.arrays())
+        # coordinates: the dimensions' arrays and those xarray lists as coordinates
+        names = {d for a in arrays.values() for d in a.metadata.dimension_names or ()}
+        names |= set(str(group.attrs.get("coordinates", "")).split())
+        for name in sorted(names & arrays.keys()):
             try:
-                array[...]
+                arrays[name][...]
             except Exception:
                 return name
+    except Exception:          # naming is a courtesy: the original error is what matters
+        return None
     return None
 
 

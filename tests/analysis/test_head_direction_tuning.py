@@ -113,10 +113,10 @@ def test_bad_input():
 def test_a_stuck_sensor_gives_no_mean_vector_length(stuck):
     """A head direction stuck at one or two values visits one or two bins: every curve
     then has R near 1 (and a tiny Rayleigh p) whatever the cell does. No number, and the
-    reason, instead."""
+    reason, instead; conjunctive_tuning's lengths likewise."""
     rec = hd_cell_recording(PREFERRED[:2], KAPPA[:2], n_samples=5000)
     rec["head_direction"][:] = np.resize(stuck, rec.sizes["time"])
-    with pytest.warns(AnalysisWarning, match="visited 1 of 60 bins|visited 2 of 60 bins"):
+    with pytest.warns(AnalysisWarning, match=r"left 3[45]\d degrees unvisited"):
         res = hp.head_direction_tuning(rec, n_shuffles=10)
     assert np.isnan(res.mean_vector_length.values).all()
     assert np.isnan(res.preferred_direction.values).all()
@@ -124,10 +124,31 @@ def test_a_stuck_sensor_gives_no_mean_vector_length(stuck):
     assert "stuck or misread sensor" in str(res.attrs["nan_reasons"])
 
 
-def test_half_the_circle_visited_still_gives_a_length():
-    """The coverage rule is half the bins: a trajectory over 200 degrees keeps its R."""
+@pytest.mark.parametrize("arc, kept", [(180, True), (186, False)])
+def test_the_coverage_rule_is_half_the_circle_unvisited(arc, kept):
+    """Directions spread over the circle but for an unvisited arc of ``arc`` degrees (30
+    and 31 of the 60 bins): R is kept at exactly half, NaN beyond."""
     rec = hd_cell_recording(PREFERRED[:2], KAPPA[:2], n_samples=5000)
-    hd = rec.head_direction.values
-    rec["head_direction"][:] = hd * (200 / 360)          # [-100, 100) degrees
+    span = np.radians(360 - arc)
+    rec["head_direction"][:] = -np.pi + (rec.head_direction.values + np.pi) * span / (2 * np.pi)
+    res = hp.head_direction_tuning(rec, n_shuffles=0)
+    assert np.isfinite(res.mean_vector_length.values).all() == kept
+
+
+def test_a_few_discrete_headings_over_the_circle_keep_their_length():
+    """Eight headings 45 degrees apart visit 8 of 60 bins, yet cover the circle."""
+    rec = hd_cell_recording(PREFERRED[:2], KAPPA[:2], n_samples=5000)
+    rec["head_direction"][:] = np.round(rec.head_direction.values / (np.pi / 4)) * np.pi / 4 \
+        - 1e-9
     res = hp.head_direction_tuning(rec, n_shuffles=0)
     assert np.isfinite(res.mean_vector_length.values).all()
+
+
+def test_conjunctive_tuning_follows_the_same_coverage_rule():
+    rec = hd_cell_recording(PREFERRED[:2], KAPPA[:2], n_samples=5000)
+    rec["head_direction"][:] = 0.5
+    with pytest.warns(AnalysisWarning, match="R: head direction left .* direction factor"):
+        res = hp.conjunctive_tuning(rec, n_shuffles=5)
+    assert np.isnan(res.hd_mean_vector_length).all()
+    assert np.isnan(res.pxd_direction_length).all()
+    assert np.isnan(res.hd_mean_vector_length_p_value).all()

@@ -32,6 +32,7 @@ informative units in the two arenas, and its scorecard beside them).
 
 import argparse
 import dataclasses
+import hashlib
 import json
 import time
 import warnings
@@ -45,7 +46,7 @@ import numpy as np
 from localization_vs_pf import errors, load, pf_estimate
 
 import hippo_probe as hp
-from hippo_probe._atomic import save_figure, write_text
+from hippo_probe._atomic import atomic_path, save_figure, write_text
 from hippo_probe._threads import limit_threads
 from hippo_probe.paper import readout as R
 from hippo_probe.tasks import make_trials, task_config
@@ -214,14 +215,13 @@ def scorecard_figure(maps, shown, rows, n_seeds=None):
                             width_ratios=[1] * N_SHOWN + [4.2])
     for k, ((name, m), row) in enumerate(zip(maps.items(), rows)):
         label = Path(name).name if Path(name).exists() else name
-        for u_pos, unit in enumerate(shown[name]):
-            pair = m.isel(unit=int(unit))
-            low, top = float(pair.min()), float(pair.max())
+        for u_pos, (unit, pair) in enumerate(zip(shown[name], m)):
+            low, top = float(np.nanmin(pair)), float(np.nanmax(pair))
             if not low < top:           # a silent unit: any range shows it flat
                 low, top = 0.0, 1.0
             for e in range(2):
                 ax = fig.add_subplot(grid[2 * k + e, u_pos])
-                ax.imshow(pair.isel(environment=e).values, origin="lower",
+                ax.imshow(pair[e], origin="lower",
                           cmap="viridis", vmin=low, vmax=top)
                 ax.set_xticks([])
                 ax.set_yticks([])
@@ -247,6 +247,41 @@ def scorecard_figure(maps, shown, rows, n_seeds=None):
     return fig
 
 
+def score(name, net, a, arenas, reference):
+    """One network's scorecard row, its ``N_SHOWN`` most informative units, their rate
+    maps in the two arenas (unit, environment, y, x) and the scorecard's verdict rules."""
+    t0 = time.time()
+    config = net.info.get("config") or {}
+    variant = config.get("variant", "faithful")
+    rec = hp.record(net, arenas)
+    card = hp.map_scorecard(rec, bin_size=0.03)
+    spikes = hp.poisson_spikes(rec, MEAN_RATE_HZ, seed=0)
+    with warnings.catch_warnings():
+        # both arenas pooled on purpose: the scorecard's information and the units
+        # the figure shows are the pooled maps' (its title says so)
+        warnings.filterwarnings("ignore", "the recording spans", hp.AnalysisWarning)
+        info = hp.spatial_information(spikes, bin_size=0.03, n_shuffles=0)
+    dim = hp.intrinsic_dimension(rec, estimators="TwoNN")
+    row = {"network": name, "variant": variant,
+           "departure_from_study": variant != "faithful",
+           "steps": net.info.get("steps_done") or config.get("steps"),
+           "error_over_pf_after_100s":
+               errors(net, *reference(net.world))["ratio_to_pf_t_gt_100s"],
+           **{k: float(card[k]) for k in card.data_vars if card[k].ndim == 0},
+           "place_fields": card.attrs["place_fields"],
+           "global_remapping": card.attrs["global_remapping"],
+           "median_information_bits_per_spike": float(info.information.median()),
+           **cell_class_fractions(spikes),
+           "twonn_dimension": float(dim.dimension.sel(estimator="TwoNN")),
+           "arena_readout_accuracy_200s": arena_readout_accuracy(
+               name, net, a.readout_trials, a.features) if a.readout_trials else None,
+           "seconds": round(time.time() - t0)}
+    units = most_informative_units(info.information.values, N_SHOWN)
+    maps = hp.ratemaps(rec, bin_size=0.03, by="environment").isel(unit=units)
+    rules = card.attrs["place_rule"] + "; " + card.attrs["remapping_rule"]
+    return row, units, maps.transpose("unit", "environment", "y", "x").values, rules
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--networks", nargs="+", default=["generalized"],
@@ -260,48 +295,56 @@ def main():
                          "(0: no readout, for a quick look)")
     ap.add_argument("--features", default=str(ROOT / "cache" / "readout"),
                     help="the readout's feature cache (resumable)")
+    ap.add_argument("--cache", default=str(ROOT / "cache" / "map_ingredients"),
+                    help="each network's row and shown maps, and the particle filter's "
+                         "estimate, kept so that a rerun computes only what is new to it "
+                         "(keyed by the network file's digest and the trial options; "
+                         "delete the folder after changing the code)")
     ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "map_ingredients"))
     a = ap.parse_args()
     check_distinct(a.networks)
     limit_threads(1)          # one process per core: BLAS too, not only torch
     out = Path(a.out)
+    cache = Path(a.cache)
+    options = (f"t{a.trials}-m{a.min_per_arena}-p{a.pf_trials}-r{a.readout_trials}")
     rows, maps, shown, pf, arenas = [], {}, {}, {}, {}
-    for name in a.networks:
-        t0 = time.time()
-        net = load(name)
-        if net.world not in pf:          # the same trials and filter for every network
-            arenas[net.world] = two_arena_trials(a.trials, net.world, a.min_per_arena)
+
+    def reference(world):
+        """The oracular particle filter on the world's generalized test trials, made once
+        (and kept in the cache: the same trials and filter for every network)."""
+        if world not in pf:
             batch = make_trials("generalized", a.pf_trials, "test", 0,
-                                config=task_config("generalized", net.world))
-            pf[net.world] = batch, pf_estimate(batch)
-        config = net.info.get("config") or {}
-        variant = config.get("variant", "faithful")
-        rec = hp.record(net, arenas[net.world])
-        card = hp.map_scorecard(rec, bin_size=0.03)
-        spikes = hp.poisson_spikes(rec, MEAN_RATE_HZ, seed=0)
-        with warnings.catch_warnings():
-            # both arenas pooled on purpose: the scorecard's information and the units
-            # the figure shows are the pooled maps' (its title says so)
-            warnings.filterwarnings("ignore", "the recording spans", hp.AnalysisWarning)
-            info = hp.spatial_information(spikes, bin_size=0.03, n_shuffles=0)
-        dim = hp.intrinsic_dimension(rec, estimators="TwoNN")
-        row = {"network": name, "variant": variant,
-               "departure_from_study": variant != "faithful",
-               "steps": net.info.get("steps_done") or config.get("steps"),
-               "error_over_pf_after_100s":
-                   errors(net, *pf[net.world])["ratio_to_pf_t_gt_100s"],
-               **{k: float(card[k]) for k in card.data_vars if card[k].ndim == 0},
-               "place_fields": card.attrs["place_fields"],
-               "global_remapping": card.attrs["global_remapping"],
-               "median_information_bits_per_spike": float(info.information.median()),
-               **cell_class_fractions(spikes),
-               "twonn_dimension": float(dim.dimension.sel(estimator="TwoNN")),
-               "arena_readout_accuracy_200s": arena_readout_accuracy(
-                   name, net, a.readout_trials, a.features) if a.readout_trials else None,
-               "seconds": round(time.time() - t0)}
+                                config=task_config("generalized", world))
+            path = cache / f"pf-{world}-{a.pf_trials}.npy"
+            if path.exists():
+                estimate = np.load(path, allow_pickle=False)
+            else:
+                estimate = np.asarray(pf_estimate(batch))
+                with atomic_path(path, overwrite=True, what="--cache") as tmp:
+                    with open(tmp, "wb") as f:
+                        np.save(f, estimate)
+            pf[world] = batch, estimate
+        return pf[world]
+
+    for name in a.networks:
+        net = load(name)
+        if net.world not in arenas:
+            arenas[net.world] = two_arena_trials(a.trials, net.world, a.min_per_arena)
+        digest = hashlib.sha256(Path(net.info["file"]).read_bytes()).hexdigest()[:16]
+        path = cache / f"{name.replace('/', '_').replace('@', '_seed')}-{digest}-{options}.npz"
+        if path.exists():
+            with np.load(path, allow_pickle=False) as kept:
+                row, rules = json.loads(str(kept["row"])), str(kept["rules"])
+                shown[name], maps[name] = kept["units"], kept["maps"]
+            print(f"{name}: from {path}", flush=True)
+        else:
+            row, shown[name], maps[name], rules = score(name, net, a, arenas[net.world],
+                                                        reference)
+            with atomic_path(path, overwrite=True, what="--cache") as tmp:
+                with open(tmp, "wb") as f:
+                    np.savez(f, row=np.array(json.dumps(row)), units=shown[name],
+                             maps=maps[name], rules=np.array(rules))
         rows.append(row)
-        maps[name] = hp.ratemaps(rec, bin_size=0.03, by="environment")
-        shown[name] = most_informative_units(info.information.values, N_SHOWN)
         print(json.dumps(row), flush=True)
     out.mkdir(parents=True, exist_ok=True)
     per_arena = np.bincount(np.asarray(next(iter(arenas.values())).environment)).tolist()
@@ -309,8 +352,7 @@ def main():
     write_text(out / "scorecard.json", json.dumps(
         {"trials": a.trials, "trials_per_arena": per_arena, "pf_trials": a.pf_trials,
          "readout_trials": a.readout_trials,
-         "rules": card.attrs["place_rule"]
-         + "; " + card.attrs["remapping_rule"], "rows": rows, "across_seeds": seeds},
+         "rules": rules, "rows": rows, "across_seeds": seeds},
         indent=1), what="out")
     keys = list(rows[0])
     write_text(out / "scorecard.csv", "\n".join(

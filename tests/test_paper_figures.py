@@ -296,11 +296,21 @@ def test_arena_probe(tmp_path):
 
 
 def test_map_ingredients_scores_each_network(tmp_path):
-    run = subprocess.run([sys.executable, "analyses/map_ingredients.py", "--networks",
-                          "generalized", "--trials", "8", "--min-per-arena", "1",
-                          "--pf-trials", "2", "--readout-trials", "0", "--out", str(tmp_path)],
-                         capture_output=True, text=True, cwd=ROOT, timeout=900)
-    assert run.returncode == 0, run.stderr[-3000:]
+    def scorecard(out):
+        run = subprocess.run([sys.executable, "analyses/map_ingredients.py", "--networks",
+                              "generalized", "--trials", "8", "--min-per-arena", "1",
+                              "--pf-trials", "2", "--readout-trials", "0",
+                              "--cache", str(tmp_path / "cache"), "--out", str(out)],
+                             capture_output=True, text=True, cwd=ROOT, timeout=900)
+        assert run.returncode == 0, run.stderr[-3000:]
+        return run.stdout
+
+    assert "from " not in scorecard(tmp_path)
+    # a rerun reads the network's row, maps and the filter's estimate from the cache
+    # and writes the same scorecard and figure
+    assert "generalized: from " in scorecard(tmp_path / "again")
+    for name in ("scorecard.json", "map_ingredients.png"):
+        assert (tmp_path / name).read_bytes() == (tmp_path / "again" / name).read_bytes()
     card = json.loads((tmp_path / "scorecard.json").read_text())
     assert sum(card["trials_per_arena"]) == 8
     (row,) = card["rows"]

@@ -320,9 +320,9 @@ def main():
                 estimate = np.load(path, allow_pickle=False)
             else:
                 estimate = np.asarray(pf_estimate(batch))
-                with atomic_path(path, overwrite=True, what="--cache") as tmp:
-                    with open(tmp, "wb") as f:
-                        np.save(f, estimate)
+                with atomic_path(path, overwrite=True, what="--cache") as tmp, \
+                        open(tmp, "wb") as f:
+                    np.save(f, estimate)
             pf[world] = batch, estimate
         return pf[world]
 
@@ -340,10 +340,10 @@ def main():
         else:
             row, shown[name], maps[name], rules = score(name, net, a, arenas[net.world],
                                                         reference)
-            with atomic_path(path, overwrite=True, what="--cache") as tmp:
-                with open(tmp, "wb") as f:
-                    np.savez(f, row=np.array(json.dumps(row)), units=shown[name],
-                             maps=maps[name], rules=np.array(rules))
+            with atomic_path(path, overwrite=True, what="--cache") as tmp, \
+                    open(tmp, "wb") as f:
+                np.savez(f, row=np.array(json.dumps(row)), units=shown[name],
+                         maps=maps[name], rules=np.array(rules))
         rows.append(row)
         print(json.dumps(row), flush=True)
     out.mkdir(parents=True, exist_ok=True)

@@ -22,6 +22,45 @@ def _log_file(folder: Path, name: str, seed: int) -> Path:
     return folder / (f"{name}.log.json" if seed == 0 else f"{name}_seed{seed}.log.json")
 
 
+def training_log(name: str, seed: int = 0, *, folder=None) -> dict:
+    """The training log of a shipped network: its config, command, training and
+    validation curves (``log["validation"]``: one entry per validation, with ``step`` and
+    ``mean_error_m``), resumes and test metrics.
+
+    Parameters
+    ----------
+    name : str
+        A shipped network's name (``hippo-probe networks`` lists them).
+    seed : int
+        Its training seed.
+    folder : str or os.PathLike, optional
+        Folder of the shipped files (default: the package's).
+
+    Raises
+    ------
+    ValueError
+        The network is not shipped at that seed, or its log cannot be read.
+
+    Examples
+    --------
+    >>> from hippo_probe.pretrained.summary import training_log
+    >>> curve = training_log("generalized_faithful")["validation"]
+    >>> curve[0]["step"], curve[-1]["step"]
+    (0, 20000)
+    """
+    folder = HERE if folder is None else Path(folder)
+    seeds = shipped_seeds(name, folder=folder)
+    if seed not in seeds:
+        raise ValueError(f"`seed` {seed!r} of {name!r} is not shipped; shipped seeds: "
+                         f"{sorted(seeds)}")
+    path = _log_file(folder, name, seed)
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError) as err:
+        raise ValueError(f"the training log of {name!r} seed {seed} ({path}) cannot "
+                         f"be read: {err}") from None
+
+
 def shipped_table(names=NAMES, *, folder=None):
     """One row per shipped network and training seed: its world, training and test metrics.
 
@@ -54,12 +93,7 @@ def shipped_table(names=NAMES, *, folder=None):
     rows = []
     for name in names:
         for seed in shipped_seeds(name, folder=folder):
-            path = _log_file(folder, name, seed)
-            try:
-                log = json.loads(path.read_text())
-            except (OSError, ValueError) as err:
-                raise ValueError(f"the training log of {name!r} seed {seed} ({path}) cannot "
-                                 f"be read: {err}") from None
+            log = training_log(name, seed, folder=folder)
             # a readout fitted as a convex problem (log["fit"]) took no gradient steps
             steps = (log.get("stopped") or {}).get("step") or max(
                 (v["step"] for v in log.get("validation", [])), default=0)

@@ -247,6 +247,18 @@ def scorecard_figure(maps, shown, rows, n_seeds=None):
     return fig
 
 
+def code_digest():
+    """A digest of the code a scorecard row depends on: every module of the package and
+    the scripts that score, so a cached row is never read by other code."""
+    files = sorted((ROOT / "hippo_probe").rglob("*.py")) + [
+        Path(__file__).resolve(), ROOT / "analyses" / "localization_vs_pf.py"]
+    digest = hashlib.sha256()
+    for path in files:
+        digest.update(path.relative_to(ROOT).as_posix().encode() + b"\0")
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:12]
+
+
 def score(name, net, a, arenas, reference):
     """One network's scorecard row, its ``N_SHOWN`` most informative units, their rate
     maps in the two arenas (unit, environment, y, x) and the scorecard's verdict rules."""
@@ -298,15 +310,16 @@ def main():
     ap.add_argument("--cache", default=str(ROOT / "cache" / "map_ingredients"),
                     help="each network's row and shown maps, and the particle filter's "
                          "estimate, kept so that a rerun computes only what is new to it "
-                         "(keyed by the network file's digest and the trial options; "
-                         "delete the folder after changing the code)")
+                         "(keyed by the network file's digest, the trial options and a "
+                         "digest of the code, so a row is never read by other code)")
     ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "map_ingredients"))
     a = ap.parse_args()
     check_distinct(a.networks)
     limit_threads(1)          # one process per core: BLAS too, not only torch
     out = Path(a.out)
     cache = Path(a.cache)
-    options = (f"t{a.trials}-m{a.min_per_arena}-p{a.pf_trials}-r{a.readout_trials}")
+    options = (f"t{a.trials}-m{a.min_per_arena}-p{a.pf_trials}-r{a.readout_trials}"
+               f"-code{code_digest()}")
     rows, maps, shown, pf, arenas = [], {}, {}, {}, {}
 
     def reference(world):
@@ -315,7 +328,7 @@ def main():
         if world not in pf:
             batch = make_trials("generalized", a.pf_trials, "test", 0,
                                 config=task_config("generalized", world))
-            path = cache / f"pf-{world}-{a.pf_trials}.npy"
+            path = cache / f"pf-{world}-{a.pf_trials}-code{code_digest()}.npy"
             if path.exists():
                 estimate = np.load(path, allow_pickle=False)
             else:

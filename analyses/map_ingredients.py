@@ -32,10 +32,12 @@ informative units in the two arenas, and its scorecard beside them).
 
 import argparse
 import dataclasses
+import functools
 import hashlib
 import json
 import time
 import warnings
+import zipfile
 from pathlib import Path
 
 import matplotlib
@@ -49,6 +51,7 @@ import hippo_probe as hp
 from hippo_probe._atomic import atomic_path, save_figure, write_text
 from hippo_probe._threads import limit_threads
 from hippo_probe.paper import readout as R
+from hippo_probe.paper.config import code_version
 from hippo_probe.tasks import make_trials, task_config
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -215,7 +218,7 @@ def scorecard_figure(maps, shown, rows, n_seeds=None):
                             width_ratios=[1] * N_SHOWN + [4.2])
     for k, ((name, m), row) in enumerate(zip(maps.items(), rows)):
         label = Path(name).name if Path(name).exists() else name
-        for u_pos, (unit, pair) in enumerate(zip(shown[name], m)):
+        for u_pos, (unit, pair) in enumerate(zip(shown[name], m, strict=True)):
             low, top = float(np.nanmin(pair)), float(np.nanmax(pair))
             if not low < top:           # a silent unit: any range shows it flat
                 low, top = 0.0, 1.0
@@ -247,16 +250,39 @@ def scorecard_figure(maps, shown, rows, n_seeds=None):
     return fig
 
 
+@functools.cache
 def code_digest():
-    """A digest of the code a scorecard row depends on: every module of the package and
-    the scripts that score, so a cached row is never read by other code."""
-    files = sorted((ROOT / "hippo_probe").rglob("*.py")) + [
-        Path(__file__).resolve(), ROOT / "analyses" / "localization_vs_pf.py"]
-    digest = hashlib.sha256()
-    for path in files:
-        digest.update(path.relative_to(ROOT).as_posix().encode() + b"\0")
+    """A digest of the code a scorecard row depends on: the package's sources
+    (``code_version``) and the scripts that score, so a cached row is never read by other
+    code. Read once per process: a run names what it writes by the code it loaded."""
+    digest = hashlib.sha256(code_version().encode())
+    for path in (Path(__file__).resolve(), ROOT / "analyses" / "localization_vs_pf.py"):
         digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
+
+
+def cache_file(cache, name, file_digest, options):
+    """The cache file of a network's row: a readable prefix of its name, then a digest of
+    the whole name, its file's digest and the options (names differing only in the
+    characters the prefix drops, or very long paths, cannot collide or overflow)."""
+    key = hashlib.sha256(f"{name}\0{file_digest}\0{options}".encode()).hexdigest()[:20]
+    prefix = "".join(c if c.isalnum() or c in "-_" else "_" for c in name)[-40:]
+    return Path(cache) / f"{prefix}-{key}.npz"
+
+
+def read_cached(path, name):
+    """A cached row, its shown units, their maps and the rules; None (with a warning)
+    where the file cannot be read, so the row is computed again."""
+    try:
+        with np.load(path, allow_pickle=False) as kept:
+            row, rules = json.loads(str(kept["row"])), str(kept["rules"])
+            units, maps = kept["units"], kept["maps"]
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as err:
+        warnings.warn(f"the cached scorecard row {path} cannot be read ({err}); "
+                      f"computing it again", stacklevel=2)
+        return None
+    row["network"] = name
+    return row, units, maps, rules
 
 
 def score(name, net, a, arenas, reference):
@@ -331,11 +357,12 @@ def main():
             path = cache / f"pf-{world}-{a.pf_trials}-code{code_digest()}.npy"
             if path.exists():
                 estimate = np.load(path, allow_pickle=False)
+                print(f"particle filter estimate: from {path}", flush=True)
             else:
                 estimate = np.asarray(pf_estimate(batch))
                 with atomic_path(path, overwrite=True, what="--cache") as tmp, \
                         open(tmp, "wb") as f:
-                    np.save(f, estimate)
+                    np.save(f, estimate, allow_pickle=False)
             pf[world] = batch, estimate
         return pf[world]
 
@@ -343,12 +370,11 @@ def main():
         net = load(name)
         if net.world not in arenas:
             arenas[net.world] = two_arena_trials(a.trials, net.world, a.min_per_arena)
-        digest = hashlib.sha256(Path(net.info["file"]).read_bytes()).hexdigest()[:16]
-        path = cache / f"{name.replace('/', '_').replace('@', '_seed')}-{digest}-{options}.npz"
-        if path.exists():
-            with np.load(path, allow_pickle=False) as kept:
-                row, rules = json.loads(str(kept["row"])), str(kept["rules"])
-                shown[name], maps[name] = kept["units"], kept["maps"]
+        digest = hashlib.sha256(Path(net.info["file"]).read_bytes()).hexdigest()
+        path = cache_file(cache, name, digest, options)
+        kept = read_cached(path, name) if path.exists() else None
+        if kept is not None:
+            row, shown[name], maps[name], rules = kept
             print(f"{name}: from {path}", flush=True)
         else:
             row, shown[name], maps[name], rules = score(name, net, a, arenas[net.world],

@@ -76,6 +76,12 @@ def main():
     ap.add_argument("--out", default=str(ROOT / "analyses" / "data" / "map_ingredients"))
     a = ap.parse_args()
     all_curves = {name: curves(name) for name in NETWORKS}
+    validated = {int(k) for by_seed in all_curves.values() for steps, _ in by_seed.values()
+                 for k in steps}
+    missing = sorted(set(a.steps) - validated)
+    if missing:
+        ap.error(f"--steps {missing} are not steps at which the logs hold a validation "
+                 f"(every 250 steps, 0 to 20,000)")
     fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
     for name, by_seed in all_curves.items():
         for k, (seed, (steps, errors)) in enumerate(by_seed.items()):
@@ -83,9 +89,11 @@ def main():
                     alpha=1.0 if seed == 0 else 0.6,
                     label=f"{name} ({len(by_seed)} seed{'s' * (len(by_seed) > 1)})"
                     if k == 0 else None)
+    # the first validations (0.25-0.43 m at step 0) lie above the plot: the range shown
+    # is the one where the networks part
     ax.set(xlabel="optimizer step", ylabel="validation error (m)", ylim=(0.08, 0.22),
            title="generalized task, darkness world: validation error while training "
-                 "(1,000 trials)")
+                 "(1,000 trials; the first steps' errors are above the top)")
     ax.title.set_fontsize(9)
     ax.legend(fontsize=8, frameon=False)
     out = Path(a.out)

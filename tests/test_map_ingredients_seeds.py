@@ -45,3 +45,23 @@ def test_a_network_named_twice_is_refused(script):
     with pytest.raises(SystemExit, match="names one network twice: 'generalized' and "
                                          "'generalized@0'"):
         script.check_distinct(["generalized", "generalized@0"])
+
+
+def test_cache_files_of_two_networks_never_collide(script, tmp_path):
+    names = ["runs/a", "runs_a", "x" * 300 + "/net", "generalized@1", "generalized_1"]
+    files = {script.cache_file(tmp_path, n, "d" * 64, "t1") for n in names}
+    assert len(files) == len(names)
+    assert all(len(f.name) < 100 for f in files)
+    assert script.cache_file(tmp_path, "a", "d" * 64, "t1") != \
+        script.cache_file(tmp_path, "a", "e" * 64, "t1")
+
+
+def test_a_damaged_cache_file_is_computed_again(script, tmp_path):
+    path = tmp_path / "row.npz"
+    path.write_bytes(b"not a zip file")
+    with pytest.warns(UserWarning, match="cannot be read .* computing it again"):
+        assert script.read_cached(path, "generalized") is None
+    np.savez(path, row=np.array('{"network": "elsewhere", "x": NaN}'), units=np.arange(2),
+             maps=np.zeros((2, 2, 3, 3)), rules=np.array("r"))
+    row, units, maps, rules = script.read_cached(path, "generalized")
+    assert row["network"] == "generalized" and np.isnan(row["x"]) and rules == "r"

@@ -296,9 +296,9 @@ def test_arena_probe(tmp_path):
 
 
 def test_map_ingredients_scores_each_network(tmp_path):
-    def scorecard(out):
+    def scorecard(out, *more):
         run = subprocess.run([sys.executable, "analyses/map_ingredients.py", "--networks",
-                              "generalized", "--trials", "8", "--min-per-arena", "1",
+                              "generalized", *more, "--trials", "8", "--min-per-arena", "1",
                               "--pf-trials", "2", "--readout-trials", "0",
                               "--cache", str(tmp_path / "cache"), "--out", str(out)],
                              capture_output=True, text=True, cwd=ROOT, timeout=900)
@@ -311,6 +311,12 @@ def test_map_ingredients_scores_each_network(tmp_path):
     assert "generalized: from " in scorecard(tmp_path / "again")
     for name in ("scorecard.json", "map_ingredients.png"):
         assert (tmp_path / name).read_bytes() == (tmp_path / "again" / name).read_bytes()
+    # a network new to the cache is scored against the filter's kept estimate
+    out = scorecard(tmp_path / "more", "generalized@1")
+    assert "particle filter estimate: from " in out and "generalized@1: from" not in out
+    first, second = json.loads((tmp_path / "more" / "scorecard.json").read_text())["rows"]
+    assert first == json.loads((tmp_path / "scorecard.json").read_text())["rows"][0]
+    assert second["network"] == "generalized@1" and second["error_over_pf_after_100s"] > 0
     card = json.loads((tmp_path / "scorecard.json").read_text())
     assert sum(card["trials_per_arena"]) == 8
     (row,) = card["rows"]

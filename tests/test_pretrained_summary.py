@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from hippo_probe.pretrained.summary import markdown, seed_spread, shipped_table
+from hippo_probe.pretrained.summary import markdown, seed_spread, shipped_table, training_log
 
 
 def _ship(folder, name, seed, errors, accuracy=None, stopped=None, steps=40000,
@@ -69,3 +69,18 @@ def test_unreadable_log_is_a_clear_error(tmp_path):
     (tmp_path / "generalized.log.json").write_text("{not json")
     with pytest.raises(ValueError, match="training log of 'generalized' seed 0"):
         shipped_table(["generalized"], folder=tmp_path)
+
+
+def test_a_training_log_is_read_by_name_and_seed(tmp_path):
+    _ship(tmp_path, "generalized", 0, (0.1, 0.1, 0.1))
+    _ship(tmp_path, "generalized", 2, (0.2, 0.2, 0.2))
+    assert training_log("generalized", 2, folder=tmp_path)["test"]["error_50s_m"] == 0.2
+    with pytest.raises(ValueError, match=r"`seed` 1 of 'generalized' is not shipped; "
+                                         r"shipped seeds: \[0, 2\]"):
+        training_log("generalized", 1, folder=tmp_path)
+    with pytest.raises(ValueError, match="shipped seeds: none"):
+        training_log("specialized", 0, folder=tmp_path)
+    with pytest.raises(ValueError, match="`name` must be a shipped network's name"):
+        training_log("../generalized", 0, folder=tmp_path)
+    with pytest.raises(TypeError, match="`seed` must be an integer; got True"):
+        training_log("generalized", True, folder=tmp_path)

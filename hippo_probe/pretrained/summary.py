@@ -48,11 +48,17 @@ def training_log(name: str, seed: int = 0, *, folder=None) -> dict:
     >>> curve[0]["step"], curve[-1]["step"]
     (0, 20000)
     """
+    from .._validators import check_nonnegative_int
+
+    if name not in NAMES:
+        raise ValueError(f"`name` must be a shipped network's name (one of {list(NAMES)}); "
+                         f"got {name!r}")
+    seed = check_nonnegative_int("seed", seed)
     folder = HERE if folder is None else Path(folder)
     seeds = shipped_seeds(name, folder=folder)
     if seed not in seeds:
-        raise ValueError(f"`seed` {seed!r} of {name!r} is not shipped; shipped seeds: "
-                         f"{sorted(seeds)}")
+        raise ValueError(f"`seed` {seed} of {name!r} is not shipped; shipped seeds: "
+                         f"{seeds or 'none'}")
     path = _log_file(folder, name, seed)
     try:
         return json.loads(path.read_text())

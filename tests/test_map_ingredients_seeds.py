@@ -65,3 +65,4 @@ def test_a_damaged_cache_file_is_computed_again(script, tmp_path):
              maps=np.zeros((2, 2, 3, 3)), rules=np.array("r"))
     row, units, maps, rules = script.read_cached(path, "generalized")
     assert row["network"] == "generalized" and np.isnan(row["x"]) and rules == "r"
+    assert units.tolist() == [0, 1] and maps.shape == (2, 2, 3, 3)

@@ -270,6 +270,13 @@ def cache_file(cache, name, file_digest, options):
     return Path(cache) / f"{prefix}-{key}.npz"
 
 
+def keep(path, save, *args, **kwargs):
+    """Write a NumPy file into the cache with ``save`` (``np.save``, ``np.savez``)
+    atomically: a run stopped midway leaves no half-written file to be read later."""
+    with atomic_path(path, overwrite=True, what="--cache") as tmp, open(tmp, "wb") as f:
+        save(f, *args, **kwargs)
+
+
 def read_cached(path, name):
     """A cached row, its shown units, their maps and the rules; None (with a warning)
     where the file cannot be read, so the row is computed again."""
@@ -360,9 +367,7 @@ def main():
                 print(f"particle filter estimate: from {path}", flush=True)
             else:
                 estimate = np.asarray(pf_estimate(batch))
-                with atomic_path(path, overwrite=True, what="--cache") as tmp, \
-                        open(tmp, "wb") as f:
-                    np.save(f, estimate, allow_pickle=False)
+                keep(path, np.save, estimate, allow_pickle=False)
             pf[world] = batch, estimate
         return pf[world]
 
@@ -379,10 +384,8 @@ def main():
         else:
             row, shown[name], maps[name], rules = score(name, net, a, arenas[net.world],
                                                         reference)
-            with atomic_path(path, overwrite=True, what="--cache") as tmp, \
-                    open(tmp, "wb") as f:
-                np.savez(f, row=np.array(json.dumps(row)), units=shown[name],
-                         maps=maps[name], rules=np.array(rules))
+            keep(path, np.savez, row=np.array(json.dumps(row)), units=shown[name],
+                 maps=maps[name], rules=np.array(rules))
         rows.append(row)
         print(json.dumps(row), flush=True)
     out.mkdir(parents=True, exist_ok=True)

@@ -25,7 +25,7 @@ import numpy as np
 
 from hippo_probe._atomic import save_figure, write_text
 from hippo_probe.pretrained import shipped_seeds
-from hippo_probe.pretrained.summary import training_log
+from hippo_probe.pretrained.summary import spread_text, training_log
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The networks compared, with their line colours; the reference first.
@@ -55,16 +55,8 @@ def table(all_curves, steps):
     lines = ["| network | seeds | " + " | ".join(f"{s:,} steps" for s in steps) + " |",
              "|---" * (len(steps) + 2) + "|"]
     for name, by_seed in all_curves.items():
-        cells = []
-        for step in steps:
-            values = [v for v in (error_at(c, step) for c in by_seed.values())
-                      if np.isfinite(v)]
-            if not values:
-                cells.append("—")
-            elif len(values) == 1:
-                cells.append(f"{values[0]:.3f}")
-            else:
-                cells.append(f"{np.mean(values):.3f} ({min(values):.3f}–{max(values):.3f})")
+        cells = [spread_text([v for v in (error_at(c, step) for c in by_seed.values())
+                              if np.isfinite(v)], 3) for step in steps]
         lines.append(f"| `{name}` | {len(by_seed)} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 

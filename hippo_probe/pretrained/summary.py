@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from .._validators import check_nonnegative_int
 from . import HERE, NAMES, checkpoint_world, shipped_seeds
 
 #: Test metrics reported per network: error (m) and arena accuracy at 50 / 100 / 200 s.
@@ -48,8 +49,6 @@ def training_log(name: str, seed: int = 0, *, folder=None) -> dict:
     >>> curve[0]["step"], curve[-1]["step"]
     (0, 20000)
     """
-    from .._validators import check_nonnegative_int
-
     if name not in NAMES:
         raise ValueError(f"`name` must be a shipped network's name (one of {list(NAMES)}); "
                          f"got {name!r}")
@@ -115,6 +114,17 @@ def shipped_table(names=NAMES, *, folder=None):
     return pd.DataFrame(rows, columns=columns).set_index(["network", "seed"])
 
 
+def spread_text(values, digits: int) -> str:
+    """Values over seeds as text: ``mean (min–max)``, the value alone for one seed, "—"
+    for none."""
+    if not values:
+        return "—"
+    if len(values) == 1:
+        return f"{values[0]:.{digits}f}"
+    return (f"{sum(values) / len(values):.{digits}f} ({min(values):.{digits}f}–"
+            f"{max(values):.{digits}f})")
+
+
 def seed_spread(table):
     """Per network: the number of seeds and each metric as ``mean (min–max)`` over them.
 
@@ -136,15 +146,8 @@ def seed_spread(table):
         entry = {"world": rows["world"].iloc[0], "variant": rows["variant"].iloc[0],
                  "seeds": ", ".join(str(s) for s in rows.index.get_level_values("seed"))}
         for metric in METRICS:
-            values = rows[metric].dropna()
-            digits = 3 if metric.startswith("error") else 2
-            if values.empty:
-                entry[metric] = "—"
-            elif len(values) == 1:
-                entry[metric] = f"{values.iloc[0]:.{digits}f}"
-            else:
-                entry[metric] = (f"{values.mean():.{digits}f} ({values.min():.{digits}f}–"
-                                 f"{values.max():.{digits}f})")
+            entry[metric] = spread_text(rows[metric].dropna().tolist(),
+                                        3 if metric.startswith("error") else 2)
         out[name] = entry
     frame = pd.DataFrame.from_dict(out, orient="index")
     frame.index.name = "network"

@@ -129,6 +129,19 @@ def _figures(args, *, extra_tracked=()):
     jobs = _jobs(getattr(args, "jobs", None), len(cfgs))
     tqdm.write(f"runs: {', '.join(cfg.run for cfg in cfgs)}"
                + (f" ({jobs} at once)" if jobs > 1 else ""))
+    primary = cfgs[0]
+    from .paper import rodent
+    try:
+        session = config.repository_file(rodent.SESSION, argument="session")
+    except FileNotFoundError:
+        if args.refresh_tracked is not None:
+            raise
+        session = None
+        print(f"(no {rodent.SESSION}: the network-vs-rodent comparison runs from a clone)")
+    # the comparison reads the first run's recording only: with several processes it
+    # fills a core that would otherwise wait for the last run
+    comparison = None if session is None else (primary.run, _network_vs_rodent,
+                                               (primary, out, session))
     timings = []                        # (run, figure, seconds), as the figures end
     with tqdm(total=len(cfgs) * len(names), desc="figures", unit="figure",
               disable=args.no_progress) as bar:
@@ -140,13 +153,13 @@ def _figures(args, *, extra_tracked=()):
         if jobs == 1:
             for cfg in cfgs:
                 _make_run(cfg, names, out, report, echo=tqdm.write)
+            compared = None
         else:
-            _make_runs_at_once(cfgs, names, out, report, jobs)
+            compared = _make_runs_at_once(cfgs, names, out, report, jobs, then=comparison)
     order = {cfg.run: k for k, cfg in enumerate(cfgs)}
     timings.sort(key=lambda timing: order[timing[0]])
     write_text(out / "timings.md", _timings_table(timings, args.size, jobs,
                                                   time.time() - t_all), what="timings")
-    primary = cfgs[0]
     shown = [out / primary.run / f"{name}.png" for name in names]
     from .paper.results import NOTES, write_results
     try:
@@ -160,16 +173,12 @@ def _figures(args, *, extra_tracked=()):
     print(f"wrote {write_results(out, out / 'RESULTS.md', notes, runs=made)}")
     from .paper import ablation
     shown.append(ablation.make(out, out, runs=made))
-    from .paper import rodent
-    try:
-        session = config.repository_file(rodent.SESSION, argument="session")
-    except FileNotFoundError:
-        if args.refresh_tracked is not None:
-            raise
-        print(f"(no {rodent.SESSION}: the network-vs-rodent comparison runs from a clone)")
-    else:
+    if session is not None:
         print(f"== network vs rodent ({primary.run}) ==")
-        rodent.make(primary, out, session=session)
+        if compared is None:
+            rodent.make(primary, out, session=session)
+        else:
+            print(compared, end="")
         shown.append(out / "network_vs_rodent.png")
     if args.refresh_tracked is not None:
         from .paper.tracked import refresh_tracked
@@ -271,9 +280,26 @@ def _interleave_worlds(cfgs):
     return [cfgs[k] for k in sorted(range(len(cfgs)), key=lambda k: (rank[k], k))]
 
 
-def _make_runs_at_once(cfgs, names, out, report, jobs):
+def _network_vs_rodent(primary, out, session) -> str:
+    """:func:`hippo_probe.paper.rodent.make` in a worker; returns what it printed."""
+    import contextlib
+    import io
+
+    from .paper import rodent
+
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        rodent.make(primary, out, session=session)
+    return printed.getvalue()
+
+
+def _make_runs_at_once(cfgs, names, out, report, jobs, then=None):
     """The runs in ``jobs`` processes (spawned: no state of this one is shared), the
-    cores split evenly between them; a run that fails stops the others at once."""
+    cores split evenly between them; a run that fails stops the others at once.
+
+    ``then``, ``(run, function, arguments)`` or None: a task queued behind the runs once
+    the run named ``run`` is done (it reads that run's recordings); returns its result.
+    """
     import multiprocessing
     import queue as queues
     from concurrent.futures import ProcessPoolExecutor
@@ -286,8 +312,20 @@ def _make_runs_at_once(cfgs, names, out, report, jobs):
         pool = ProcessPoolExecutor(jobs, mp_context=context)
         try:
             timings = manager.Queue()
+            ordered = _interleave_worlds(cfgs)
             futures = [pool.submit(_make_run_in_worker, cfg, names, out, timings)
-                       for cfg in _interleave_worlds(cfgs)]
+                       for cfg in ordered]
+            waited = None if then is None else \
+                futures[[cfg.run for cfg in ordered].index(then[0])]
+            extra = None
+
+            def queue_then():
+                nonlocal extra
+                if extra is None and waited is not None and waited.done() \
+                        and waited.exception() is None:
+                    extra = pool.submit(then[1], *then[2])
+                    futures.append(extra)
+
             left = len(cfgs) * len(names)
             while left:
                 try:
@@ -297,8 +335,11 @@ def _make_runs_at_once(cfgs, names, out, report, jobs):
                     failed = [f for f in futures if f.done() and f.exception() is not None]
                     if failed:
                         raise failed[0].exception()
-            for f in futures:
+                queue_then()
+            for f in futures[:len(ordered)]:
                 f.result()
+            queue_then()
+            result = None if extra is None else extra.result()
         except BaseException:
             # the executor has no public way to stop a running task: without this, the
             # other runs would go on (minutes to hours) before the error is shown
@@ -307,6 +348,7 @@ def _make_runs_at_once(cfgs, names, out, report, jobs):
             pool.shutdown(wait=False, cancel_futures=True)
             raise
         pool.shutdown()
+    return result
 
 
 def _timings_table(timings, size, jobs, wall_s) -> str:

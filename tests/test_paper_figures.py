@@ -78,6 +78,9 @@ def test_runs_made_at_once_give_the_numbers_of_runs_made_in_turn(figures_run, tm
         run = path.parent.name
         assert path.read_bytes() == (at_once / run / "fig2.json").read_bytes(), run
         assert "fig2 (tiny)" in (at_once / run / "log.txt").read_text()
+    # the rodent comparison, made in a worker beside the last runs, as in this process
+    name = "network_vs_rodent.json"
+    assert (tmp_path / name).read_bytes() == (at_once / name).read_bytes()
 
 
 @pytest.mark.parametrize("extra", [["figures", "--size", "tiny"],

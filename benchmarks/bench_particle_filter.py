@@ -9,7 +9,7 @@ take on idle cores (CPU time / threads: "idle"). Peak memory is the growth of th
 resident set size of a fresh process while it filters ``--trials`` trials (it counts
 numba's allocations, which tracemalloc does not see).
 
-Targets (issues 6 and 12): PF, 1,000 particles, 1,000 trials x 500 steps in under 60 s;
+Targets: PF, 1,000 particles, 1,000 trials x 500 steps in under 60 s;
 PF-SLAM, 10,000 particles, the same trials in under 10 minutes: about 8.3 million
 particle-steps per second each, in the darkness world (particles carry a heading drift,
 the contact likelihood is evaluated per particle); the compass world's numbers beside.

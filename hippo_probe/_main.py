@@ -155,6 +155,8 @@ def _figures(args, *, extra_tracked=()):
                 _make_run(cfg, names, out, report, echo=tqdm.write)
             compared = None
         else:
+            # a future, read where the comparison would run in turn: its failure stops
+            # nothing before RESULTS.md is written
             compared = _make_runs_at_once(cfgs, names, out, report, jobs, then=comparison)
     order = {cfg.run: k for k, cfg in enumerate(cfgs)}
     timings.sort(key=lambda timing: order[timing[0]])
@@ -178,7 +180,7 @@ def _figures(args, *, extra_tracked=()):
         if compared is None:
             rodent.make(primary, out, session=session)
         else:
-            print(compared, end="")
+            print(compared.result(), end="")
         shown.append(out / "network_vs_rodent.png")
     if args.refresh_tracked is not None:
         from .paper.tracked import refresh_tracked
@@ -288,7 +290,7 @@ def _network_vs_rodent(primary, out, session) -> str:
     from .paper import rodent
 
     printed = io.StringIO()
-    with contextlib.redirect_stdout(printed):
+    with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(printed):
         rodent.make(primary, out, session=session)
     return printed.getvalue()
 
@@ -298,7 +300,8 @@ def _make_runs_at_once(cfgs, names, out, report, jobs, then=None):
     cores split evenly between them; a run that fails stops the others at once.
 
     ``then``, ``(run, function, arguments)`` or None: a task queued behind the runs once
-    the run named ``run`` is done (it reads that run's recordings); returns its result.
+    the run named ``run`` is done (it reads that run's recordings); returns its future
+    (done; None without ``then``), whose error, unlike a run's, stops nothing.
     """
     import multiprocessing
     import queue as queues
@@ -324,7 +327,6 @@ def _make_runs_at_once(cfgs, names, out, report, jobs, then=None):
                 if extra is None and waited is not None and waited.done() \
                         and waited.exception() is None:
                     extra = pool.submit(then[1], *then[2])
-                    futures.append(extra)
 
             left = len(cfgs) * len(names)
             while left:
@@ -336,10 +338,9 @@ def _make_runs_at_once(cfgs, names, out, report, jobs, then=None):
                     if failed:
                         raise failed[0].exception()
                 queue_then()
-            for f in futures[:len(ordered)]:
+            for f in futures:
                 f.result()
             queue_then()
-            result = None if extra is None else extra.result()
         except BaseException:
             # the executor has no public way to stop a running task: without this, the
             # other runs would go on (minutes to hours) before the error is shown
@@ -347,8 +348,8 @@ def _make_runs_at_once(cfgs, names, out, report, jobs, then=None):
                 process.terminate()
             pool.shutdown(wait=False, cancel_futures=True)
             raise
-        pool.shutdown()
-    return result
+        pool.shutdown()                 # waits for ``extra`` too
+    return extra
 
 
 def _timings_table(timings, size, jobs, wall_s) -> str:

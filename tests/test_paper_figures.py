@@ -28,14 +28,14 @@ def _git_status():
 def figures_run(tmp_path_factory):
     """One tiny run of ``hippo-probe main`` (world statistics, then ``figures``: the slow
     part of this module), two runs at once, with the checkout's git status before and
-    after it."""
+    after it and what it printed."""
     out = tmp_path_factory.mktemp("figures")
     before = _git_status()
     run = subprocess.run([sys.executable, "-m", "hippo_probe.cli", "main", "--size",
                           "tiny", "--jobs", "2", "--out", str(out)], capture_output=True,
                          text=True, cwd=ROOT, timeout=1200)
     assert run.returncode == 0, run.stderr[-4000:]
-    return out, before, _git_status()
+    return out, before, _git_status(), run.stdout
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +50,7 @@ def figures(figures_run):
 def test_figures_write_only_under_out(figures_run):
     """`hippo-probe main --out DIR` leaves the checkout as it was: the tracked copies
     (paper_figures/png, RESULTS.md) are refreshed only by --refresh-tracked CLONE."""
-    out, before, after = figures_run
+    out, before, after, _ = figures_run
     assert (out / "RESULTS.md").stat().st_size > 1000
     assert (out / "example_trials.png").stat().st_size > 1000
     # a tiny run's verdicts mean nothing, and its RESULTS.md says so first
@@ -78,9 +78,14 @@ def test_runs_made_at_once_give_the_numbers_of_runs_made_in_turn(figures_run, tm
         run = path.parent.name
         assert path.read_bytes() == (at_once / run / "fig2.json").read_bytes(), run
         assert "fig2 (tiny)" in (at_once / run / "log.txt").read_text()
-    # the rodent comparison, made in a worker beside the last runs, as in this process
+    # the rodent comparison, made in a worker beside the last runs, as in this process,
+    # and what it printed shown under its heading, after RESULTS.md is written
     name = "network_vs_rodent.json"
     assert (tmp_path / name).read_bytes() == (at_once / name).read_bytes()
+    printed = figures_run[3]
+    heading = printed.index("== network vs rodent")
+    assert printed.index("wrote ") < heading < printed.index("| mouse ADn |") \
+        < printed.index(f"{name[:-5]}.png")
 
 
 @pytest.mark.parametrize("extra", [["figures", "--size", "tiny"],

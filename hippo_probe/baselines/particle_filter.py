@@ -83,8 +83,8 @@ kernel loops over walls outside and particles inside with branch-free arithmetic
 compiles to SIMD code (~1 ns per particle and wall, ten times the particle-outer loop).
 The motion step draws its random numbers particle by particle (the stream's order) and
 does its arithmetic, the rotation's cosine and sine above all, in separate branch-free
-loops, which vectorize as well: 11% less time per localization trial than one loop doing
-both, with the same numbers bit for bit.
+loops, which vectorize as well: 9% more particle-steps per second than one loop doing
+both (``benchmarks/bench_particle_filter.py``), with the same numbers bit for bit.
 Each trial draws its random numbers from ``SeedSequence([seed, tag, trial_index])``:
 results do not depend on batching or thread count.
 
@@ -316,7 +316,10 @@ def _cos_sin(r, c, s):
 
     The series go over every angle in a loop without branches, which LLVM turns into
     vector code (its eight divisions per angle are most of the cost: a vector division
-    does eight angles at once); the few angles beyond 1 rad are redone after.
+    does four or eight angles at once), each angle's operations those of the scalar
+    series; the few angles beyond 1 rad are redone after with the C library's functions
+    (numba's SVML, used only where Intel's ``icc_rt`` is installed, could vectorize those
+    calls too and round them differently in the last bit).
     """
     for i in range(c.size):
         r2 = r[i] * r[i]

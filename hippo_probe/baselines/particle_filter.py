@@ -434,7 +434,7 @@ def _filter_trial(rng, particles, walls, obs, model, outputs):
         # 1. motion: the drift diffuses, then D = (1 + e_s) R(e_r - eta) D_obs, the
         # first-order inverse of the sensor (the displacement was sensed in the frame
         # turned by the drift)
-        # (the draws one particle after another, as the random stream has always been
+        # (the draws one particle after another, the order in which the random stream is
         # read; the arithmetic in loops of their own, which vectorize)
         dox, doy = disp[t, 0], disp[t, 1]
         for i in range(cur):

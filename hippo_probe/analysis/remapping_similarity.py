@@ -174,10 +174,10 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
         center_units=bool(center_units),
         control="environment labels of the trials randomly permuted")
     # worded for the NaN pairs only: a session of 1,000 trials has 499,500 pairs
-    nan = np.flatnonzero(~ok)
+    na, nb = ia[~ok], ib[~ok]
     reasons = [f"the trials share {c} visited bins (< {min_common})" if c < min_common
-               else "a trial's population vector is constant" for c in common[ia, ib][nan]]
-    labels = [f"trials {a}-{b}" for a, b in zip(trials[ia][nan], trials[ib][nan])]
+               else "a trial's population vector is constant" for c in common[na, nb]]
+    labels = [f"trials {a}-{b}" for a, b in zip(trials[na], trials[nb])]
     empty = [c for c, k in zip(COMPARISONS, masks) if not (k & ok).any()]
     if empty:
         attrs["empty_comparisons"] = (f"{empty}: no pair of that kind (e.g. only one "

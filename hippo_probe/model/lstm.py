@@ -33,7 +33,9 @@ LSTM recurrent networks. JMLR 3, 115-143.
 
 from __future__ import annotations
 
+import contextvars
 import math
+from contextlib import contextmanager
 
 import numba
 import numpy as np
@@ -72,6 +74,87 @@ def _derivative_factors(gates, cells, tanh_cells, w_peep, a_o, b_c, k, k_c):
                 k_c[t, b, j] = f + ki * w_peep[0, j] + kf * w_peep[1, j]
 
 
+def _plain_step(g, c, h, w_h4_t, w_peep, c_new, tanh_c, h_new):
+    """One step of the plain float32 forward, in place: ``g`` (4, B, H) holds the step's
+    input projection plus bias and becomes the gates (post-activation); ``c_new``,
+    ``tanh_c`` and ``h_new`` (B, H) receive ``c_t``, ``tanh(c_t)`` and ``h_t`` from
+    ``c = c_{t-1}`` and ``h = h_{t-1}``. The training path and the inference path
+    (:func:`_plain_inference`) both step through it, so they compute the same numbers."""
+    B, H = h.shape
+    g.baddbmm_(h.expand(4, B, H), w_h4_t)
+    g[:2].addcmul_(c, w_peep[:2, None, :]).sigmoid_()     # peepholes of i and f
+    g[2].tanh_()
+    torch.mul(g[1], c, out=c_new)
+    c_new.addcmul_(g[0], g[2])
+    g[3].addcmul_(c_new, w_peep[2]).sigmoid_()
+    torch.mul(g[3], torch.tanh(c_new, out=tanh_c), out=h_new)
+
+
+#: Buffers that the inference path uses again from one call to the next, while
+#: :func:`reused_buffers` is active (None otherwise): by name, each of the last shape.
+_REUSED = contextvars.ContextVar("reused_lstm_buffers", default=None)
+
+
+@contextmanager
+def reused_buffers():
+    """Within the block, the forward passes of :class:`PeepholeLSTM` that autograd does
+    not record use their large buffers again instead of allocating them anew; the ``h``
+    each returns is valid only until the next such pass.
+
+    For a caller that runs a network on many batches of trials and copies each ``h``
+    out (:func:`hippo_probe.model.record.record`): a 250-trial batch of 500 steps
+    needs 0.6 GB of gates and ``h``, which the kernel would otherwise hand out afresh,
+    zeroed page by page, for every batch (on the project's 2-core VM that zeroing took
+    a tenth of a recording's time).
+    """
+    token = _REUSED.set({})
+    try:
+        yield
+    finally:
+        _REUSED.reset(token)
+
+
+def _buffer(name, shape, like):
+    """An uninitialized tensor of ``shape`` like ``like``: the one of the same name and
+    shape from the previous call inside :func:`reused_buffers`, else a new one."""
+    reused = _REUSED.get()
+    if reused is None:
+        return like.new_empty(shape)
+    held = reused.get(name)
+    if held is None or held.shape != shape or held.dtype != like.dtype \
+            or held.device != like.device:
+        reused.pop(name, None)                 # freed before its successor is made
+        held = reused[name] = like.new_empty(shape)
+    return held
+
+
+@torch.no_grad()
+def _plain_inference(x, h0, c0, w_x, w_h, bias, w_peep):
+    """The plain forward pass without what its backward needs: the same operations as
+    :class:`_PeepholeLSTMFunction`'s forward, hence h bit for bit (tested), returned as
+    ``(h_seq, h_T, c_T)``.
+
+    The cell and ``tanh(c)`` of every step are not kept: two (B, H) buffers take turns
+    instead of two (T, B, H) arrays. The gates (T, 4, B, H) and ``h`` come from
+    :func:`_buffer`, so that inside :func:`reused_buffers` a recording's batches of
+    trials write into the same memory.
+    """
+    T, B, F = x.shape
+    H = w_h.shape[1]
+    # input projection of every step at once, as the Function makes it
+    gates = torch.matmul(x.unsqueeze(1), w_x.view(4, H, F).transpose(1, 2),
+                         out=_buffer("gates", (T, 4, B, H), x))
+    gates += bias.view(4, 1, H)
+    hidden = _buffer("hidden", (T + 1, B, H), x)       # hidden[t] = h_{t-1}
+    hidden[0] = h0
+    w_h4_t = w_h.view(4, H, H).transpose(1, 2)
+    c, c_new, tanh_c = c0.clone(), x.new_empty(B, H), x.new_empty(B, H)
+    for t in range(T):
+        _plain_step(gates[t], c, hidden[t], w_h4_t, w_peep, c_new, tanh_c, hidden[t + 1])
+        c, c_new = c_new, c
+    return hidden[1:], hidden[-1].clone(), c
+
+
 class _PeepholeLSTMFunction(torch.autograd.Function):
     """Forward and backward of the whole sequence.
 
@@ -95,19 +178,10 @@ class _PeepholeLSTMFunction(torch.autograd.Function):
         tanh_cells = x.new_empty(T, B, H)
         cells[0] = c0
         hidden[0] = h0
-        w_if = w_peep[:2, None, :]                 # (2, 1, H) peepholes of i and f
-        w_o = w_peep[2]
         w_h4_t = w_h4.transpose(1, 2)
         for t in range(T):
-            g = gates[t]
-            c = cells[t]
-            g.baddbmm_(hidden[t].expand(4, B, H), w_h4_t)
-            g[:2].addcmul_(c, w_if).sigmoid_()
-            g[2].tanh_()
-            c_new = torch.mul(g[1], c, out=cells[t + 1])
-            c_new.addcmul_(g[0], g[2])
-            g[3].addcmul_(c_new, w_o).sigmoid_()
-            torch.mul(g[3], torch.tanh(c_new, out=tanh_cells[t]), out=hidden[t + 1])
+            _plain_step(gates[t], cells[t], hidden[t], w_h4_t, w_peep,
+                        cells[t + 1], tanh_cells[t], hidden[t + 1])
         ctx.save_for_backward(x, w_x, w_h, w_peep, gates, cells, tanh_cells, hidden)
         h_seq = hidden[1:]
         return h_seq, h_seq[-1].clone(), cells[-1].clone()
@@ -649,8 +723,10 @@ class PeepholeLSTM(nn.Module):
             h_seq, h_n, c_n = _FusedPeepholeLSTMFunction.apply(*args, True, kernels)
         elif recorded and on_cpu and x.dtype == torch.float32:
             h_seq, h_n, c_n = _FusedPeepholeLSTMFunction.apply(*args, False, "numba")
-        else:
+        elif recorded:
             h_seq, h_n, c_n = _PeepholeLSTMFunction.apply(*args)
+        else:
+            h_seq, h_n, c_n = _plain_inference(*args)
         return h_seq, (h_n, c_n)
 
     def extra_repr(self) -> str:

@@ -15,6 +15,7 @@ import torch
 
 from ..recording import annotate, stack_trials, trial_layout, validate
 from ..tasks import fixed_arenas, task_config
+from .lstm import reused_buffers
 
 #: baseline result names accepted by ``record(..., baselines=...)``, with their dims
 BASELINE_VARIABLES = {
@@ -76,8 +77,9 @@ def _run_network(network, batch, chunk: int = 250, *, progress: bool = False):
     T, B = batch.inputs.shape[:2]
     h_out = prob_out = None            # (B, T, ...): trial-major, reshaped at the end
     xys = []
+    # each chunk's h is copied out before the next: their buffers are used again
     with tqdm(total=B, desc=f"record {batch.task}", unit="trial",
-              disable=not progress) as bar:
+              disable=not progress) as bar, reused_buffers():
         for lo in range(0, B, chunk):
             xy, logits, h = network(torch.from_numpy(batch.inputs[:, lo:lo + chunk]))
             hi = lo + h.shape[1]

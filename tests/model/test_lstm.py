@@ -5,8 +5,10 @@ from hippo_probe.model.lstm import (
     PeepholeLSTM,
     _FusedPeepholeLSTMFunction,
     _PeepholeLSTMFunction,
+    _plain_inference,
     peephole_step,
     reference_peephole_lstm,
+    reused_buffers,
 )
 
 
@@ -87,6 +89,42 @@ def test_module_trains_through_the_fused_path_and_infers_through_the_plain_one()
         torch.testing.assert_close(lstm(x)[0], plain, rtol=0, atol=0)
     assert not torch.equal(h.detach(), plain)      # two paths, differing in rounding only
     assert _rel(h.detach(), plain) < 1e-6
+
+
+@pytest.mark.parametrize("B", [250, 37])
+def test_inference_path_is_the_plain_path_bit_for_bit(B):
+    """A recording's forward pass (no autograd: small buffers used again at every step,
+    the input projection made step by step) gives the whole-sequence Function's h, h_T
+    and c_T exactly, at the study's width and a recording's batch of trials (and an odd
+    one)."""
+    torch.manual_seed(1)
+    lstm = PeepholeLSTM(9, hidden_size=256)
+    x = torch.randn(40, B, 9)
+    h0, c0 = 0.1 * torch.randn(B, 256), 0.1 * torch.randn(B, 256)
+    params = (lstm.weight_x, lstm.weight_h, lstm.bias, lstm.weight_peephole)
+    with torch.no_grad():
+        whole = _PeepholeLSTMFunction.apply(x, h0, c0, *params)
+        stepped = _plain_inference(x, h0, c0, *params)
+    for a, b in zip(stepped, whole):
+        assert torch.equal(a, b)
+
+
+def test_reused_buffers_hold_h_until_the_next_pass_only_inside_the_block():
+    torch.manual_seed(2)
+    lstm = PeepholeLSTM(9, hidden_size=32)
+    x1, x2 = torch.randn(20, 5, 9), torch.randn(20, 5, 9)
+    with torch.no_grad():
+        alone = [lstm(x)[0].clone() for x in (x1, x2)]
+        apart = [lstm(x)[0] for x in (x1, x2)]
+        with reused_buffers():
+            first = lstm(x1)[0]
+            kept = first.clone()
+            second = lstm(x2)[0]
+            third = lstm(torch.randn(20, 4, 9))[0]        # another shape: new buffers
+    assert apart[0].data_ptr() != apart[1].data_ptr()
+    assert second.data_ptr() == first.data_ptr() != third.data_ptr()
+    assert torch.equal(kept, alone[0]) and torch.equal(second, alone[1])
+    assert torch.equal(first, second)             # the first h, overwritten by the second
 
 
 def _nonneg_reference(x, h, c, w_x, w_h, bias, w_peep):

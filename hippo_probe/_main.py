@@ -8,8 +8,6 @@ main`` passes its own clone).
 """
 
 import os
-import shutil
-import threading
 import time
 from contextlib import contextmanager
 
@@ -105,9 +103,7 @@ def _refresh_of_main(args):
     return args.refresh_tracked
 
 
-def _figures(args, *, extra_tracked=(), cache_done=None):
-    """``hippo-probe figures``; ``cache_done()``, if given, is called once no run reads the
-    cached recordings any more (``main`` removes them then, beside the last writes)."""
+def _figures(args, *, extra_tracked=()):
     _check_refresh(args)
     out = check_output("--out", args.out, kind="folder")
     cache = out / "cache" if args.cache is None else check_output(
@@ -162,8 +158,6 @@ def _figures(args, *, extra_tracked=(), cache_done=None):
             # a future, read where the comparison would run in turn: its failure stops
             # nothing before RESULTS.md is written
             compared = _make_runs_at_once(cfgs, names, out, report, jobs, then=comparison)
-            if cache_done is not None:
-                cache_done()            # the comparison, its last reader, is done too
     order = {cfg.run: k for k, cfg in enumerate(cfgs)}
     timings.sort(key=lambda timing: order[timing[0]])
     write_text(out / "timings.md", _timings_table(timings, args.size, jobs,
@@ -188,8 +182,6 @@ def _figures(args, *, extra_tracked=(), cache_done=None):
         else:
             print(compared.result(), end="")
         shown.append(out / "network_vs_rodent.png")
-    if jobs == 1 and cache_done is not None:
-        cache_done()
     if args.refresh_tracked is not None:
         from .paper.tracked import refresh_tracked
         for path in refresh_tracked([*shown, *extra_tracked], out / "RESULTS.md",
@@ -392,22 +384,14 @@ def _main(args):
     fig = plot_example_trials()
     save_figure(fig, out / "example_trials.png", dpi=120)
     print(f"saved {out / 'example_trials.png'}")
-    removing = []
-
-    def remove_cache():
-        # on a thread: the unlinking (seconds for the GB of four runs) overlaps the
-        # writing of RESULTS.md and the ablation on the other core
-        removing.append(threading.Thread(target=shutil.rmtree, args=(out / "cache",),
-                                         kwargs={"ignore_errors": True}))
-        removing[0].start()
-
     _figures(args.__class__(out=args.out, size=args.size, only=None, cache=args.cache,
                             refresh_tracked=args.refresh_tracked, world=None,
                             jobs=args.jobs, no_progress=args.no_progress),
-             extra_tracked=(out / "example_trials.png",),
-             cache_done=remove_cache if args.cache is None and not args.keep_cache else None)
-    if removing:
-        removing[0].join()
+             extra_tracked=(out / "example_trials.png",))
+    if args.cache is None and not args.keep_cache:
+        import shutil
+
+        shutil.rmtree(out / "cache", ignore_errors=True)
         if (out / "cache").exists():
             print(f"could not remove all of the cached recordings in {out / 'cache'}")
         else:

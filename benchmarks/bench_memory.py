@@ -4,8 +4,8 @@ Stores of 256 float32 units x N samples (N = 1e6 and 4e6; 1 GB and 4 GB of activ
 in 1 trial and in 200 trials, are written once with ``save_recording`` and opened with
 ``open_recording`` (dask, trial-aligned chunks). Each analysis runs in a fresh process
 that reports its peak resident memory (``VmHWM``) and its peak right after
-opening (imports + the per-sample coords that ``open_recording`` loads). Targets (issue
-16): peak under 2 GB at 4e6 samples, and growing less than 10% from 1e6 to 4e6.
+opening (imports + the per-sample coords that ``open_recording`` loads). Targets:
+peak under 2 GB at 4e6 samples, and growing less than 10% from 1e6 to 4e6.
 
     python benchmarks/bench_memory.py [--samples 1000000 4000000] [--trials 1 200]
         [--dir /tmp/hippo_probe_bench_memory] [--analyses ratemaps spatial_information ...]

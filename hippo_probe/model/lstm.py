@@ -13,7 +13,7 @@ For input ``x_t`` and previous state ``(h_{t-1}, c_{t-1})``::
 
 Why a custom autograd Function: a per-step Python loop under autograd records ~15 graph
 nodes per step, and ``torch.nn.LSTM`` has no peepholes. Here the forward pass writes the
-gate activations into one preallocated (T, B, 4, H) buffer (the input projection of all
+gate activations into one preallocated (T, 4, B, H) buffer (the input projection of all
 steps is one matmul); the backward pass precomputes every elementwise derivative factor
 for all steps at once, so its sequential loop is five kernels per step; the weight
 gradients are then one large matmul each. See ``benchmarks/bench_lstm.py``.
@@ -21,8 +21,10 @@ gradients are then one large matmul each. See ``benchmarks/bench_lstm.py``.
 A second Function, the fused training path (:class:`_FusedPeepholeLSTMFunction`), runs the
 same math with each step's elementwise work in one numba kernel, for training on the CPU:
 in float32, or with its matmuls in bfloat16 on the CPU's AMX units and the rest in float32
-(``PeepholeLSTM(precision="bf16")``). Inference (under ``torch.no_grad()``) always takes
-the first Function.
+(``PeepholeLSTM(precision="bf16")``). Inference (under ``torch.no_grad()``) always runs
+the first Function's forward steps (:func:`_plain_inference`: the same numbers, without
+the per-step cells that only the backward pass needs; :func:`reused_buffers` lets a caller
+that runs many batches, as ``record`` does, write each into the previous one's memory).
 
 References
 ----------

@@ -21,8 +21,8 @@ gradients are then one large matmul each. See ``benchmarks/bench_lstm.py``.
 A second Function, the fused training path (:class:`_FusedPeepholeLSTMFunction`), runs the
 same math with each step's elementwise work in one numba kernel, for training on the CPU:
 in float32, or with its matmuls in bfloat16 on the CPU's AMX units and the rest in float32
-(``PeepholeLSTM(precision="bf16")``). Inference (under ``torch.no_grad()``) always runs
-the first Function's forward steps (:func:`_plain_inference`: the same numbers, without
+(``PeepholeLSTM(precision="bf16")``). A forward pass that autograd does not record
+(evaluation, ``record``) always runs the first Function's forward steps (:func:`_plain_inference`: the same numbers, without
 the per-step cells that only the backward pass needs; :func:`reused_buffers` lets a caller
 that runs many batches, as ``record`` does, write each into the previous one's memory).
 
@@ -92,22 +92,25 @@ def _plain_step(g, c, h, w_h4_t, w_peep, c_new, tanh_c, h_new):
     torch.mul(g[3], torch.tanh(c_new, out=tanh_c), out=h_new)
 
 
-#: Buffers that the inference path uses again from one call to the next, while
-#: :func:`reused_buffers` is active (None otherwise): by name, each of the last shape.
+#: Buffers that the inference path uses again from one call to the next while
+#: :func:`reused_buffers` is active (None otherwise): name -> the buffer of that name from
+#: the latest call (made anew when the shape, dtype or device changes). Each thread
+#: starts with None; threads started inside the block must not run the network.
 _REUSED = contextvars.ContextVar("reused_lstm_buffers", default=None)
 
 
 @contextmanager
 def reused_buffers():
     """Within the block, the forward passes of :class:`PeepholeLSTM` that autograd does
-    not record use their large buffers again instead of allocating them anew; the ``h``
-    each returns is valid only until the next such pass.
+    not record, in this thread, use their large buffers again instead of allocating
+    them anew: the ``h_seq`` each returns is valid only until the next such pass
+    (``h_T`` and ``c_T`` are not reused).
 
-    For a caller that runs a network on many batches of trials and copies each ``h``
-    out (:func:`hippo_probe.model.record.record`): a 250-trial batch of 500 steps
-    needs 0.6 GB of gates and ``h``, which the kernel would otherwise hand out afresh,
-    zeroed page by page, for every batch (on the project's 2-core VM that zeroing took
-    a tenth of a recording's time).
+    For a caller that runs a network on many batches of trials and copies each
+    ``h_seq`` out (:func:`hippo_probe.model.record.record`): a 250-trial batch of 500
+    steps needs 0.64 GB of gates and ``h``, which the operating system would otherwise
+    zero page by page for every batch (about a tenth of a recording's time on a 2-core
+    machine).
     """
     token = _REUSED.set({})
     try:
@@ -136,8 +139,8 @@ def _plain_inference(x, h0, c0, w_x, w_h, bias, w_peep):
     :class:`_PeepholeLSTMFunction`'s forward, hence h bit for bit (tested), returned as
     ``(h_seq, h_T, c_T)``.
 
-    The cell and ``tanh(c)`` of every step are not kept: two (B, H) buffers take turns
-    instead of two (T, B, H) arrays. The gates (T, 4, B, H) and ``h`` come from
+    The cell and ``tanh(c)`` of every step are not kept: (B, H) buffers, the cell's two
+    taking turns, instead of two (T, B, H) arrays. The gates (T, 4, B, H) and ``h`` come from
     :func:`_buffer`, so that inside :func:`reused_buffers` a recording's batches of
     trials write into the same memory.
     """

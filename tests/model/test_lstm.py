@@ -93,10 +93,9 @@ def test_module_trains_through_the_fused_path_and_infers_through_the_plain_one()
 
 @pytest.mark.parametrize("B", [250, 37])
 def test_inference_path_is_the_plain_path_bit_for_bit(B):
-    """A recording's forward pass (no autograd: small buffers used again at every step,
-    the input projection made step by step) gives the whole-sequence Function's h, h_T
-    and c_T exactly, at the study's width and a recording's batch of trials (and an odd
-    one)."""
+    """A recording's forward pass (no autograd: no per-step cells, two (B, H) cell
+    buffers taking turns) gives the whole-sequence Function's h, h_T and c_T exactly, at
+    the study's width and a recording's batch of trials (and an odd one)."""
     torch.manual_seed(1)
     lstm = PeepholeLSTM(9, hidden_size=256)
     x = torch.randn(40, B, 9)
@@ -114,17 +113,21 @@ def test_reused_buffers_hold_h_until_the_next_pass_only_inside_the_block():
     lstm = PeepholeLSTM(9, hidden_size=32)
     x1, x2 = torch.randn(20, 5, 9), torch.randn(20, 5, 9)
     with torch.no_grad():
-        alone = [lstm(x)[0].clone() for x in (x1, x2)]
+        alone = [lstm(x) for x in (x1, x2)]
         apart = [lstm(x)[0] for x in (x1, x2)]
         with reused_buffers():
-            first = lstm(x1)[0]
+            first, (first_h, first_c) = lstm(x1)
             kept = first.clone()
             second = lstm(x2)[0]
             third = lstm(torch.randn(20, 4, 9))[0]        # another shape: new buffers
+        after = lstm(x1)[0]
     assert apart[0].data_ptr() != apart[1].data_ptr()
     assert second.data_ptr() == first.data_ptr() != third.data_ptr()
-    assert torch.equal(kept, alone[0]) and torch.equal(second, alone[1])
-    assert torch.equal(first, second)             # the first h, overwritten by the second
+    assert after.data_ptr() not in (first.data_ptr(), third.data_ptr())
+    assert torch.equal(kept, alone[0][0]) and torch.equal(second, alone[1][0])
+    assert not torch.equal(first, kept)           # the first h, overwritten by the second
+    # the final state is not reused: still the first pass's
+    assert torch.equal(first_h, alone[0][1][0]) and torch.equal(first_c, alone[0][1][1])
 
 
 def _nonneg_reference(x, h, c, w_x, w_h, bias, w_peep):

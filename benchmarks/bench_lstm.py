@@ -14,7 +14,9 @@ emulates bf16 ~20x slower, the bf16 rows are left out unless ``--bf16`` asks for
 Beside the times: the matmul GFLOP/s our step achieves — the FLOPs of all its matmuls,
 2 T B (F+H) 4H forward and twice that backward, over the step's time — against a plain
 matmul of the same shapes in the same precision, measured in the same run (the machine's
-ceiling for this work).
+ceiling for this work). With bf16, the step's per-step products also run with their
+weights prepacked once for oneDNN (private ops the step does not use): how much of the
+gap to the ceiling is the weights' repacking on every call.
 
     python benchmarks/bench_lstm.py [--batch 64 256] [--steps 500] [--hidden 256]
         [--threads 1 2] [--repeats 3] [--naive] [--plot benchmarks/bench_lstm.png]
@@ -149,6 +151,37 @@ def matmul_ceiling(T, B, F, H, dtype, repeats):
     return step_flops(T, B, F, H) / best / 1e9
 
 
+def prepacked_speedup(T, B, F, H, repeats):
+    """The step's per-step bf16 products (forward (B, F+H) x (F+H, 4H), backward (B, 4H)
+    x (4H, H)) by ``torch.mm`` and by oneDNN with each weight reordered once
+    (``torch.ops.mkldnn._reorder_linear_weight`` / ``_linear_pointwise``, private ops):
+    returns (seconds by mm, seconds prepacked, whether the products are equal). Where
+    oneDNN repacks a weight into its blocked layout on every call (on AMX, tiles), the
+    difference is that repacking; the step does not use the private ops."""
+    g = torch.Generator().manual_seed(0)
+    xh = torch.randn(T, B, F + H, generator=g).bfloat16()
+    dg = torch.randn(T, B, 4 * H, generator=g).bfloat16()
+    w = torch.randn(4 * H, F + H, generator=g).bfloat16()       # (out, in), as nn.Linear
+    w_h = torch.randn(H, 4 * H, generator=g).bfloat16()
+    linear = torch.ops.mkldnn._linear_pointwise
+    packed = [torch.ops.mkldnn._reorder_linear_weight(m, B) for m in (w, w_h)]
+
+    def by_mm():
+        for t in range(T):
+            torch.mm(xh[t], w.t())
+        for t in range(T):
+            torch.mm(dg[t], w_h.t())
+
+    def prepacked():
+        for t in range(T):
+            linear(xh[t], packed[0], None, "none", [], "")
+        for t in range(T):
+            linear(dg[t], packed[1], None, "none", [], "")
+
+    equal = torch.equal(linear(xh[0], packed[0], None, "none", [], ""), torch.mm(xh[0], w.t()))
+    return time_step(by_mm, repeats)[0], time_step(prepacked, repeats)[0], equal
+
+
 def plot(results, batches, threads, path, title):
     """Grouped bars per batch: median seconds per step, per implementation and thread
     count, each labelled with its throughput as a multiple of torch.nn.LSTM float32's."""
@@ -281,6 +314,14 @@ def main():
                       f"{peer / med:6.2f}x {gf:>28s}")
             print(f"{'plain matmuls of these shapes':32s} " + ", ".join(
                 f"{str(d)[6:]} {c:.0f} GFLOP/s" for d, c in ceiling.items()) + " (the ceilings)")
+            if bf16:
+                try:
+                    mm_s, packed_s, equal = prepacked_speedup(T, batch, F, H, a.repeats)
+                    print(f"{'per-step bf16 products':32s} torch.mm {mm_s:.3f} s, weights "
+                          f"prepacked once {packed_s:.3f} s ({mm_s / packed_s:.2f}x; "
+                          f"products {'equal' if equal else 'NOT equal'})")
+                except (RuntimeError, AttributeError) as err:     # no oneDNN build
+                    print(f"{'per-step bf16 products':32s} prepacked: not available ({err})")
             all_results[batch][threads] = results
     if a.concurrent:
         concurrent(a, a.concurrent, a.batch[0], "bf16" if bf16 else "fp32")

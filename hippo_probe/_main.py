@@ -8,6 +8,7 @@ main`` passes its own clone).
 """
 
 import os
+import shutil
 import time
 from contextlib import contextmanager
 
@@ -49,9 +50,11 @@ def add_commands(sub):
     p.add_argument("--refresh-tracked", default=None, metavar="CLONE", help=refresh_help)
     p.add_argument("--jobs", type=count(1), default=None, metavar="N", help=jobs_help)
     p.add_argument("--keep-cache", action="store_true",
-                   help="keep the cached recordings (OUT/cache, a few GB at the paper size) "
-                        "for a later run; by default they are removed once every figure "
-                        "and RESULTS.md are written (a --cache folder is always kept)")
+                   help="keep the cached recordings (OUT/cache, a few GB a run at the "
+                        "paper size) for a later run; by default each run's are removed "
+                        "once its figures are made (the first run's, which the rodent "
+                        "comparison reads, and the reference filters' once RESULTS.md is "
+                        "written; a --cache folder is always kept)")
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(run=_main)
     f = sub.add_parser("figures", help="regenerate the paper figures and RESULTS.md into "
@@ -103,7 +106,11 @@ def _refresh_of_main(args):
     return args.refresh_tracked
 
 
-def _figures(args, *, extra_tracked=()):
+def _figures(args, *, extra_tracked=(), drop_recordings=False):
+    """``hippo-probe figures``; with ``drop_recordings`` (``main``, which removes the
+    cache at the end) each run's cached recordings are removed as soon as its figures are
+    made, but those the network-vs-rodent comparison reads, so that the runs do not all
+    hold theirs on disk at once."""
     _check_refresh(args)
     out = check_output("--out", args.out, kind="folder")
     cache = out / "cache" if args.cache is None else check_output(
@@ -142,6 +149,8 @@ def _figures(args, *, extra_tracked=()):
     # fills a core that would otherwise wait for the last run
     comparison = None if session is None else (primary.run, _network_vs_rodent,
                                                (primary, out, session))
+    dropped = {cfg.run for cfg in cfgs if comparison is None or cfg is not primary} \
+        if drop_recordings else set()
     timings = []                        # (run, figure, seconds), as the figures end
     with tqdm(total=len(cfgs) * len(names), desc="figures", unit="figure",
               disable=args.no_progress) as bar:
@@ -152,12 +161,14 @@ def _figures(args, *, extra_tracked=()):
 
         if jobs == 1:
             for cfg in cfgs:
-                _make_run(cfg, names, out, report, echo=tqdm.write)
+                _make_run(cfg, names, out, report, echo=tqdm.write,
+                          drop_cache=cfg.run in dropped)
             compared = None
         else:
             # a future, read where the comparison would run in turn: its failure stops
             # nothing before RESULTS.md is written
-            compared = _make_runs_at_once(cfgs, names, out, report, jobs, then=comparison)
+            compared = _make_runs_at_once(cfgs, names, out, report, jobs, then=comparison,
+                                          dropped=dropped)
     order = {cfg.run: k for k, cfg in enumerate(cfgs)}
     timings.sort(key=lambda timing: order[timing[0]])
     write_text(out / "timings.md", _timings_table(timings, args.size, jobs,
@@ -198,9 +209,10 @@ def _jobs(requested: int | None, n_runs: int) -> int:
     return max(1, min(requested or cores, n_runs))
 
 
-def _make_run(cfg, names, out, report, echo=print):
+def _make_run(cfg, names, out, report, echo=print, drop_cache=False):
     """Every figure ``names`` of the run ``cfg`` into ``out/<run>/``; ``report(run, name,
-    seconds)`` after each."""
+    seconds)`` after each; then, with ``drop_cache``, the run's cached recordings removed
+    (not its world's reference filters, which the world's other runs read)."""
     from . import paper
 
     for name in names:
@@ -208,6 +220,9 @@ def _make_run(cfg, names, out, report, echo=print):
         echo(f"== {cfg.run}: {name} ({cfg.name}) ==")
         paper.builder(name).make(cfg, out / cfg.run)
         report(cfg.run, name, time.time() - t0)
+    if drop_cache:
+        shutil.rmtree(cfg.cache, ignore_errors=True)
+        echo(f"   {cfg.run}: removed its cached recordings ({cfg.cache})")
 
 
 #: Thread counts of the native libraries, read when they load: set for the workers before
@@ -235,7 +250,7 @@ def _huge_pages_for_malloc() -> str:
     return ":".join(tunables)
 
 
-def _make_run_in_worker(cfg, names, out, queue):
+def _make_run_in_worker(cfg, names, out, queue, drop_cache=False):
     """:func:`_make_run` in a worker process (its threads set by :data:`THREAD_VARIABLES`),
     the run's messages and warnings into ``out/<run>/log.txt``, each figure's time onto
     ``queue``."""
@@ -244,7 +259,7 @@ def _make_run_in_worker(cfg, names, out, queue):
     (out / cfg.run).mkdir(parents=True, exist_ok=True)
     with open(out / cfg.run / "log.txt", "w") as log, contextlib.redirect_stdout(log), \
             contextlib.redirect_stderr(log):
-        _make_run(cfg, names, out, lambda *timing: queue.put(timing))
+        _make_run(cfg, names, out, lambda *timing: queue.put(timing), drop_cache=drop_cache)
 
 
 @contextmanager
@@ -295,13 +310,14 @@ def _network_vs_rodent(primary, out, session) -> str:
     return printed.getvalue()
 
 
-def _make_runs_at_once(cfgs, names, out, report, jobs, then=None):
+def _make_runs_at_once(cfgs, names, out, report, jobs, then=None, dropped=frozenset()):
     """The runs in ``jobs`` processes (spawned: no state of this one is shared), the
     cores split evenly between them; a run that fails stops the others at once.
 
     ``then``, ``(run, function, arguments)`` or None: a task queued behind the runs once
     the run named ``run`` is done (it reads that run's recordings); returns its future
-    (done; None without ``then``), whose error, unlike a run's, stops nothing.
+    (done; None without ``then``), whose error, unlike a run's, stops nothing. The runs
+    named in ``dropped`` remove their cached recordings when done (:func:`_make_run`).
     """
     import multiprocessing
     import queue as queues
@@ -316,8 +332,8 @@ def _make_runs_at_once(cfgs, names, out, report, jobs, then=None):
         try:
             timings = manager.Queue()
             ordered = _interleave_worlds(cfgs)
-            futures = [pool.submit(_make_run_in_worker, cfg, names, out, timings)
-                       for cfg in ordered]
+            futures = [pool.submit(_make_run_in_worker, cfg, names, out, timings,
+                                   cfg.run in dropped) for cfg in ordered]
             waited = None if then is None else \
                 futures[[cfg.run for cfg in ordered].index(then[0])]
             extra = None
@@ -387,10 +403,9 @@ def _main(args):
     _figures(args.__class__(out=args.out, size=args.size, only=None, cache=args.cache,
                             refresh_tracked=args.refresh_tracked, world=None,
                             jobs=args.jobs, no_progress=args.no_progress),
-             extra_tracked=(out / "example_trials.png",))
+             extra_tracked=(out / "example_trials.png",),
+             drop_recordings=args.cache is None and not args.keep_cache)
     if args.cache is None and not args.keep_cache:
-        import shutil
-
         shutil.rmtree(out / "cache", ignore_errors=True)
         if (out / "cache").exists():
             print(f"could not remove all of the cached recordings in {out / 'cache'}")

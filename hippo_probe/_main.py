@@ -50,11 +50,12 @@ def add_commands(sub):
     p.add_argument("--refresh-tracked", default=None, metavar="CLONE", help=refresh_help)
     p.add_argument("--jobs", type=count(1), default=None, metavar="N", help=jobs_help)
     p.add_argument("--keep-cache", action="store_true",
-                   help="keep the cached recordings (OUT/cache, a few GB a run at the "
-                        "paper size) for a later run; by default each run's are removed "
-                        "once its figures are made (the first run's, which the rodent "
-                        "comparison reads, and the reference filters' once RESULTS.md is "
-                        "written; a --cache folder is always kept)")
+                   help="keep the cached recordings (OUT/cache, about 3 GB a run at the "
+                        "paper size) for a later run, or to rerun a failed job cheaply; by "
+                        "default each run's are removed as soon as its figures are made, "
+                        "and the rest (the first run's, which the network-vs-rodent "
+                        "comparison reads, and each world's reference filters) when the "
+                        "job ends; a --cache folder is never removed")
     p.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     p.set_defaults(run=_main)
     f = sub.add_parser("figures", help="regenerate the paper figures and RESULTS.md into "
@@ -109,7 +110,7 @@ def _refresh_of_main(args):
 def _figures(args, *, extra_tracked=(), drop_recordings=False):
     """``hippo-probe figures``; with ``drop_recordings`` (``main``, which removes the
     cache at the end) each run's cached recordings are removed as soon as its figures are
-    made, but those the network-vs-rodent comparison reads, so that the runs do not all
+    made, except those the network-vs-rodent comparison reads, so that the runs do not all
     hold theirs on disk at once."""
     _check_refresh(args)
     out = check_output("--out", args.out, kind="folder")
@@ -222,7 +223,9 @@ def _make_run(cfg, names, out, report, echo=print, drop_cache=False):
         report(cfg.run, name, time.time() - t0)
     if drop_cache:
         shutil.rmtree(cfg.cache, ignore_errors=True)
-        echo(f"   {cfg.run}: removed its cached recordings ({cfg.cache})")
+        echo(f"   {cfg.run}: " + (f"could not remove all of its cached recordings "
+                                  f"({cfg.cache})" if cfg.cache.exists() else
+                                  f"removed its cached recordings ({cfg.cache})"))
 
 
 #: Thread counts of the native libraries, read when they load: set for the workers before
@@ -400,12 +403,12 @@ def _main(args):
     fig = plot_example_trials()
     save_figure(fig, out / "example_trials.png", dpi=120)
     print(f"saved {out / 'example_trials.png'}")
+    remove = args.cache is None and not args.keep_cache
     _figures(args.__class__(out=args.out, size=args.size, only=None, cache=args.cache,
                             refresh_tracked=args.refresh_tracked, world=None,
                             jobs=args.jobs, no_progress=args.no_progress),
-             extra_tracked=(out / "example_trials.png",),
-             drop_recordings=args.cache is None and not args.keep_cache)
-    if args.cache is None and not args.keep_cache:
+             extra_tracked=(out / "example_trials.png",), drop_recordings=remove)
+    if remove:
         shutil.rmtree(out / "cache", ignore_errors=True)
         if (out / "cache").exists():
             print(f"could not remove all of the cached recordings in {out / 'cache'}")

@@ -22,9 +22,10 @@ A second Function, the fused training path (:class:`_FusedPeepholeLSTMFunction`)
 same math with each step's elementwise work in one numba kernel, for training on the CPU:
 in float32, or with its matmuls in bfloat16 on the CPU's AMX units and the rest in float32
 (``PeepholeLSTM(precision="bf16")``). A forward pass that autograd does not record
-(evaluation, ``record``) always runs the first Function's forward steps (:func:`_plain_inference`: the same numbers, without
-the per-step cells that only the backward pass needs; :func:`reused_buffers` lets a caller
-that runs many batches, as ``record`` does, write each into the previous one's memory).
+(evaluation, ``record``) always runs the first Function's forward steps
+(:func:`_plain_inference`: the same numbers, without the per-step cells that only the
+backward pass needs; :func:`reused_buffers` lets a caller that runs many batches, as
+``record`` does, write each into the previous one's memory).
 
 References
 ----------
@@ -74,6 +75,16 @@ def _derivative_factors(gates, cells, tanh_cells, w_peep, a_o, b_c, k, k_c):
                 k[t, 1, b, j] = kf
                 k[t, 2, b, j] = i * (1 - g * g)
                 k_c[t, b, j] = f + ki * w_peep[0, j] + kf * w_peep[1, j]
+
+
+def _input_gates(x, w_x, bias, out=None):
+    """The input projection of every step at once plus the bias, (T, 4, B, H) (into
+    ``out`` if given): the start of the gates of both plain paths."""
+    F = x.shape[2]
+    H = w_x.shape[0] // 4
+    gates = torch.matmul(x.unsqueeze(1), w_x.view(4, H, F).transpose(1, 2), out=out)
+    gates += bias.view(4, 1, H)
+    return gates
 
 
 def _plain_step(g, c, h, w_h4_t, w_peep, c_new, tanh_c, h_new):
@@ -144,12 +155,9 @@ def _plain_inference(x, h0, c0, w_x, w_h, bias, w_peep):
     :func:`_buffer`, so that inside :func:`reused_buffers` a recording's batches of
     trials write into the same memory.
     """
-    T, B, F = x.shape
+    T, B, _ = x.shape
     H = w_h.shape[1]
-    # input projection of every step at once, as the Function makes it
-    gates = torch.matmul(x.unsqueeze(1), w_x.view(4, H, F).transpose(1, 2),
-                         out=_buffer("gates", (T, 4, B, H), x))
-    gates += bias.view(4, 1, H)
+    gates = _input_gates(x, w_x, bias, out=_buffer("gates", (T, 4, B, H), x))
     hidden = _buffer("hidden", (T + 1, B, H), x)       # hidden[t] = h_{t-1}
     hidden[0] = h0
     w_h4_t = w_h.view(4, H, H).transpose(1, 2)
@@ -172,12 +180,10 @@ class _PeepholeLSTMFunction(torch.autograd.Function):
 
     @staticmethod
     def forward(ctx, x, h0, c0, w_x, w_h, bias, w_peep):
-        T, B, F = x.shape
+        T, B, _ = x.shape
         H = w_h.shape[1]
         w_h4 = w_h.view(4, H, H)
-        # input projection of every step at once, straight into (T, 4, B, H)
-        gates = torch.matmul(x.unsqueeze(1), w_x.view(4, H, F).transpose(1, 2))
-        gates += bias.view(4, 1, H)
+        gates = _input_gates(x, w_x, bias)                 # (T, 4, B, H)
         cells = x.new_empty(T + 1, B, H)           # cells[t] = c_{t-1}; cells[0] = c0
         hidden = x.new_empty(T + 1, B, H)          # hidden[t] = h_{t-1}
         tanh_cells = x.new_empty(T, B, H)

@@ -20,8 +20,30 @@ def wrap_angle(angle):
     return np.where(r >= np.pi, r - 2 * np.pi, r)
 
 
+_TWO_PI = 2.0 * math.pi
+
+
 @numba.njit(cache=True, nogil=True, inline="always")
 def wrap_angle_scalar(a):
-    """:func:`wrap_angle` of one float, for numba kernels."""
-    r = (a + math.pi) % (2.0 * math.pi) - math.pi
-    return r - 2.0 * math.pi if r >= math.pi else r
+    """:func:`wrap_angle` of one float, for numba kernels.
+
+    Bit for bit ``(a + pi) % (2 pi) - pi`` as numba computes it (C's ``fmod``, then
+    Python's sign rule), without the call to ``fmod`` where ``|a + pi| < 4 pi``: there
+    the remainder is ``x``, ``x - 2 pi`` or ``x + 2 pi``, each exact (Sterbenz's lemma),
+    and ``fmod`` is exact too. The particle filters wrap an angle per particle and wall.
+    """
+    x = a + math.pi
+    if -_TWO_PI < x < _TWO_PI:              # fmod(x, 2 pi), exactly
+        f = x
+    elif _TWO_PI <= x < 2.0 * _TWO_PI:
+        f = x - _TWO_PI
+    elif -2.0 * _TWO_PI < x <= -_TWO_PI:
+        f = x + _TWO_PI
+    else:                                   # far out, inf or NaN: numba's own modulo
+        f = x % _TWO_PI
+    if f < 0.0:                             # the sign of the divisor, as Python's %
+        f += _TWO_PI
+    elif f == 0.0:
+        f = 0.0                             # +0, never -0
+    r = f - math.pi
+    return r - _TWO_PI if r >= math.pi else r

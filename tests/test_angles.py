@@ -48,3 +48,42 @@ def test_the_array_and_scalar_wraps_agree_on_the_half_open_interval():
     w = wrap_angle(a)
     assert ((w >= -np.pi) & (w < np.pi)).all()
     np.testing.assert_allclose([wrap_angle_scalar(x) for x in a], w, rtol=0, atol=1e-12)
+
+
+def test_the_scalar_wrap_is_numbas_modulo_bit_for_bit():
+    """The kernels' wrap skips ``fmod`` near the circle; it must give what numba's ``%``
+    gives for every float, at the fast path's edges (x + pi = +-2 pi, +-4 pi), far out,
+    at signed zeros and at inf and NaN."""
+    numba = pytest.importorskip("numba")
+    import math
+
+    @numba.njit
+    def by_modulo(a):
+        r = (a + math.pi) % (2.0 * math.pi) - math.pi
+        return r - 2.0 * math.pi if r >= math.pi else r
+
+    @numba.njit
+    def mismatches(values):
+        bad = 0
+        for v in values:
+            u, w = wrap_angle_scalar(v), by_modulo(v)
+            same = (u == w and math.copysign(1.0, u) == math.copysign(1.0, w)) or \
+                (u != u and w != w)
+            bad += 0 if same else 1
+        return bad
+
+    def around(x, ulps=3000):
+        up = [x]
+        down = [x]
+        for _ in range(ulps):
+            up.append(np.nextafter(up[-1], np.inf))
+            down.append(np.nextafter(down[-1], -np.inf))
+        return np.array(up + down)
+
+    rng = np.random.default_rng(0)
+    values = np.concatenate(
+        [rng.uniform(-30, 30, 200_000), rng.normal(0, 1, 200_000),
+         rng.uniform(-1e6, 1e6, 10_000),
+         np.array([0.0, -0.0, np.inf, -np.inf, np.nan, 1e300, -1e300, 5e-324, -5e-324])]
+        + [around(k * np.pi) for k in (-7, -5, -3, -1, 0, 1, 3, 5, 7)])
+    assert mismatches(values) == 0

@@ -708,18 +708,41 @@ def _contact_likelihood(walls, heading, angle, path_length, contact_args, distan
     moving from ``(xs, ys)`` to ``(xe, ye)`` in one arena (``walls (V, 8)``), ``d_ik`` the
     apex of their V against wall ``k`` (:mod:`~hippo_probe.baselines.contact`). Walls
     beyond the angle cutoff, and walls the path stays more than ``_BAND`` s.d. beyond
-    the sensed distance, are skipped (their terms are below 1e-14 of the peak)."""
+    the sensed distance, are skipped (their terms are below 1e-14 of the peak).
+
+    The second test needs the wall's terms, but a bound on them settles most walls: as
+    ``reach <= path_length`` and ``sd`` is at most its value at the larger of the two
+    spreads, a wall farther from the path's end than ``distance + path_length + _BAND
+    sd_max`` (plus a nanometre for rounding) fails it, and is skipped before its
+    exponential and trigonometry are computed; the sums are those of every wall.
+    Particles with the same heading as the one before (every particle in the compass
+    world, whose drift hypotheses stay 0) reuse its walls' terms."""
     angle_obs_var, angle_wall_var, distance_var, path_length_error, cutoff = contact_args
+    beta_var = angle_obs_var * angle_wall_var / (angle_obs_var + angle_wall_var)
+    sd_max = math.sqrt(distance_var + 0.25 * path_length ** 2
+                       * max(path_length_error ** 2, beta_var))
+    too_far = distance + path_length + _BAND * sd_max + 1e-9
+    n_walls = walls.shape[0]
+    terms = np.empty((n_walls, 3))
+    terms_of = np.full(n_walls, -1)     # the particle whose heading the terms are for
+    source = -1                         # the first particle with the current heading
     for i in range(xe.size):
         total = 0.0
         h = heading - eta[i]
-        for k in range(walls.shape[0]):
-            weight, reach, sd = wall_terms(walls[k, 7], h, angle, path_length, angle_obs_var,
-                                           angle_wall_var, distance_var, path_length_error,
-                                           cutoff)
+        if i == 0 or h != heading - eta[i - 1]:
+            source = i
+        for k in range(n_walls):
+            end = _wall_distance(walls[k], xe[i], ye[i])
+            if end > too_far:
+                continue
+            if terms_of[k] != source:
+                terms[k, 0], terms[k, 1], terms[k, 2] = wall_terms(
+                    walls[k, 7], h, angle, path_length, angle_obs_var, angle_wall_var,
+                    distance_var, path_length_error, cutoff)
+                terms_of[k] = source
+            weight, reach, sd = terms[k, 0], terms[k, 1], terms[k, 2]
             if weight == 0.0:
                 continue
-            end = _wall_distance(walls[k], xe[i], ye[i])
             if end - 0.5 * reach > distance + 0.5 * reach + _BAND * sd:
                 continue
             start = _wall_distance(walls[k], xs[i], ys[i])

@@ -1,5 +1,7 @@
 """The contact model against the world it inverts."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -62,3 +64,61 @@ def test_angle_of_the_true_wall_is_calibrated(world):
     if world == "darkness":     # the sensed heading alone is off by the drift
         drifting = wall_angle_error(walls[b, touched, 7], obs.heading[b, t], obs.angle[b, t])
         assert np.std(drifting / model.angle_sd) > 1.5
+
+
+def _contact_likelihood_of_every_wall(walls, heading, angle, path_length, contact_args,
+                                      distance, eta, xs, ys, xe, ye):
+    """The contact likelihood with every wall's terms computed, for each particle: the
+    reference for the kernel's shortcuts."""
+    from hippo_probe.baselines.contact import wall_terms
+    from hippo_probe.baselines.particle_filter import _BAND, _SQRT2PI, _wall_distance
+
+    lik = np.zeros(len(xe))
+    for i in range(len(xe)):
+        for wall in walls:
+            weight, reach, sd = wall_terms.py_func(wall[7], heading - eta[i], angle,
+                                                   path_length, *contact_args)
+            if weight == 0.0:
+                continue
+            end = _wall_distance.py_func(wall, xe[i], ye[i])
+            if end - 0.5 * reach > distance + 0.5 * reach + _BAND * sd:
+                continue
+            start = _wall_distance.py_func(wall, xs[i], ys[i])
+            z = (distance - min(0.5 * (start + end - reach), start, end)) / sd
+            if abs(z) < _BAND:
+                lik[i] += weight / (_SQRT2PI * sd) * math.exp(-0.5 * z * z)
+    return lik
+
+
+@pytest.mark.parametrize("world", WORLDS)
+def test_contact_likelihood_skips_only_walls_out_of_reach(world):
+    """The kernel skips far walls by a bound before their terms and reuses the terms of a
+    heading seen by the particle before: the likelihoods must be those of every wall, bit
+    for bit, for particles anywhere in the arena and near its walls, with runs of equal
+    drift hypotheses (as in the compass world) and distinct ones."""
+    from hippo_probe.baselines.particle_filter import _contact_likelihood
+
+    config = task_config("generalized", world)
+    model = ContactModel.from_config(config.world, ContactModelConfig())
+    rng = np.random.default_rng(3)
+    walls = wall_table(random_arena(rng, 10, 0.33).vertices)
+    n = 600
+    corner = walls[rng.integers(0, len(walls), n), :2]            # near a vertex
+    xe = np.where(np.arange(n) < n // 2, corner[:, 0] + rng.normal(0, 0.04, n),
+                  rng.uniform(-0.6, 0.6, n))
+    ye = np.where(np.arange(n) < n // 2, corner[:, 1] + rng.normal(0, 0.04, n),
+                  rng.uniform(-0.6, 0.6, n))
+    xs, ys = xe - rng.normal(0, 0.02, n), ye - rng.normal(0, 0.02, n)
+    eta = np.repeat(rng.normal(0, 0.3, n // 20), 20)             # runs of equal drifts
+    eta[::7] = rng.normal(0, 0.3, eta[::7].size)
+    args = model.kernel_args()
+    for step in range(8):
+        angle, distance = rng.uniform(-np.pi, np.pi), rng.uniform(0, model.touch_range)
+        heading, path_length = rng.uniform(-np.pi, np.pi), rng.uniform(0.0, 0.04)
+        lik = np.empty(n)
+        _contact_likelihood(walls, heading, angle, path_length, args, distance, eta, xs, ys,
+                            xe, ye, lik)
+        expected = _contact_likelihood_of_every_wall(walls, heading, angle, path_length,
+                                                     args, distance, eta, xs, ys, xe, ye)
+        assert (expected > 0).sum() > 20                           # walls within reach
+        assert np.array_equal(lik, expected), step

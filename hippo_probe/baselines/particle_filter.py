@@ -412,6 +412,7 @@ def _filter_trial(rng, particles, walls, obs, model, outputs):
     gain, rotation, cosine, sine, wall_distance = (np.empty(cap), np.empty(cap),
                                                    np.empty(cap), np.empty(cap),
                                                    np.empty(cap))
+    near = np.empty(cap, dtype=np.int64)
     alloc = np.empty(n_arenas, dtype=np.int64)
     mass = np.empty(n_arenas)
     block = np.zeros(n_arenas + 1, dtype=np.int64)
@@ -491,20 +492,11 @@ def _filter_trial(rng, particles, walls, obs, model, outputs):
             # no contact at the fine steps inside the step either: particles on the chord
             # from start to end, headings turning by the sensed change
             for j in range(1, n_checks + 1):
-                f = j / (n_checks + 1.0)
-                back = heading[t] - (1.0 - f) * turn[t]
-                for i in range(cur):
-                    xm[i] = xp[i] + f * (x[i] - xp[i])
-                    ym[i] = yp[i] + f * (y[i] - yp[i])
-                for a in range(n_arenas):
-                    lo, hi = block[a], block[a + 1]
-                    if lo < hi:
-                        _nearest_walls(walls[a], xm[lo:hi], ym[lo:hi], mid_best[lo:hi],
-                                       mid_nearest[lo:hi], mid_crossings[lo:hi])
-                for i in range(cur):
-                    if mid_best[i] < touch_range * touch_range:
-                        lik[i] *= 1.0 - towards(walls[arena[i], int(mid_nearest[i]), 7],
-                                                back - eta[i], heading_sd)
+                _intermediate_check(j / (n_checks + 1.0), heading[t], turn[t], walls, block,
+                                    xp[:cur], yp[:cur], x[:cur], y[:cur], eta[:cur],
+                                    arena[:cur], wall_distance[:cur], touch_range,
+                                    heading_sd, lik[:cur], near, xm, ym, mid_best,
+                                    mid_nearest, mid_crossings)
         total = 0.0
         for i in range(cur):
             total += w[i] * lik[i]
@@ -601,6 +593,45 @@ def _filter_trial(rng, particles, walls, obs, model, outputs):
                                 best[lo:hi], nearest[lo:hi], crossings[lo:hi])
                 lo = hi
     return n_skipped, n_resampled
+
+
+@numba.njit(cache=True, nogil=True)
+def _intermediate_check(f, heading, turn, walls, block, xs, ys, xe, ye, eta, arena,
+                        end_distance, touch_range, heading_sd, lik, near, xm, ym, best,
+                        nearest, crossings):
+    """No contact at fraction ``f`` of the step: the likelihood ``lik`` of each particle
+    moving from ``(xs, ys)`` to ``(xe, ye)`` whose point there on the chord is within the
+    touch range of a wall is multiplied by the probability of not heading into that wall
+    (the heading then ``heading - (1 - f) turn``, less the particle's drift).
+
+    Only particles that could be that near are looked at: a point ``g`` from the chord's
+    end is at least ``end_distance - g`` from every wall, so a particle with
+    ``end_distance - g`` beyond the touch range (by a nanometre, for rounding) keeps the
+    likelihood the full check would leave it. The others are gathered, arena by arena
+    (``block``; particles sorted by arena), into ``near, xm, ym``; ``best, nearest,
+    crossings`` are scratch space for their walls.
+    """
+    back = heading - (1.0 - f) * turn
+    reach = touch_range + 1e-9
+    m = 0
+    for a in range(block.size - 1):
+        first = m
+        for i in range(block[a], block[a + 1]):
+            dx, dy = xe[i] - xs[i], ye[i] - ys[i]
+            if end_distance[i] - (1.0 - f) * math.sqrt(dx * dx + dy * dy) > reach:
+                continue
+            near[m] = i
+            xm[m] = xs[i] + f * dx
+            ym[m] = ys[i] + f * dy
+            m += 1
+        if m > first:
+            _nearest_walls(walls[a], xm[first:m], ym[first:m], best[first:m],
+                           nearest[first:m], crossings[first:m])
+    for q in range(m):
+        if best[q] < touch_range * touch_range:
+            i = near[q]
+            lik[i] *= 1.0 - towards(walls[arena[i], int(nearest[q]), 7], back - eta[i],
+                                    heading_sd)
 
 
 @numba.njit(cache=True, nogil=True)

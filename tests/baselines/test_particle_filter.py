@@ -381,3 +381,53 @@ def test_rotation_cosines_and_sines_to_3e7_and_exact_beyond_one_radian():
     # (the C library's values, as math gives them; NumPy's vector cos may differ by an ulp)
     assert c[~small].tolist() == [math.cos(v) for v in r[~small]]
     assert s[~small].tolist() == [math.sin(v) for v in r[~small]]
+
+
+def test_intermediate_check_looks_only_at_particles_that_could_touch():
+    """The no-contact check inside a step skips particles whose chord point is provably
+    beyond the touch range: its likelihoods must be those of checking every particle, bit
+    for bit, in several arenas at once (PF-SLAM's blocks), near walls and corners and far
+    from them."""
+    from hippo_probe.baselines.contact import towards, wall_table
+    from hippo_probe.baselines.particle_filter import _intermediate_check, _nearest_walls
+
+    rng = np.random.default_rng(5)
+    walls = np.stack([wall_table(random_arena(rng, 10, 0.33).vertices) for _ in range(3)])
+    sizes = [400, 0, 700]                                       # an empty block too
+    block = np.r_[0, np.cumsum(sizes)].astype(np.int64)
+    n = block[-1]
+    arena = np.repeat(np.arange(3), sizes).astype(np.int64)
+    corner = walls[arena, rng.integers(0, 10, n), :2]
+    inner = rng.uniform(-0.3, 0.3, (n, 2))
+    end = np.where((np.arange(n) % 2 == 0)[:, None], corner + rng.normal(0, 0.05, (n, 2)),
+                   inner)
+    start = end - rng.normal(0, 0.04, (n, 2))
+    xs, ys, xe, ye = start[:, 0].copy(), start[:, 1].copy(), end[:, 0].copy(), end[:, 1].copy()
+    eta = rng.normal(0, 0.2, n)
+    touch_range, heading_sd = 0.05, 0.1
+    best, nearest, crossings = np.empty(n), np.empty(n), np.empty(n)
+    end_distance = np.empty(n)
+    for a in range(3):
+        lo, hi = block[a], block[a + 1]
+        _nearest_walls(walls[a], xe[lo:hi], ye[lo:hi], best[lo:hi], nearest[lo:hi],
+                       crossings[lo:hi])
+    end_distance[:] = np.sqrt(best)
+    for f in (0.5, 0.25, 0.75):
+        heading, turn = rng.uniform(-np.pi, np.pi), rng.normal(0, 0.3)
+        expected = rng.uniform(0.5, 1.0, n)
+        lik = expected.copy()
+        xm, ym = xs + f * (xe - xs), ys + f * (ye - ys)
+        for a in range(3):
+            lo, hi = block[a], block[a + 1]
+            _nearest_walls(walls[a], xm[lo:hi], ym[lo:hi], best[lo:hi], nearest[lo:hi],
+                           crossings[lo:hi])
+        touching = np.flatnonzero(best < touch_range * touch_range)
+        assert 50 < touching.size < n - 50                      # both kinds present
+        for i in touching:
+            expected[i] *= 1.0 - towards(walls[arena[i], int(nearest[i]), 7],
+                                         heading - (1.0 - f) * turn - eta[i], heading_sd)
+        scratch = [np.empty(n) for _ in range(5)]
+        _intermediate_check(f, heading, turn, walls, block, xs, ys, xe, ye, eta, arena,
+                            end_distance, touch_range, heading_sd, lik,
+                            np.empty(n, np.int64), *scratch)
+        assert np.array_equal(lik, expected), f

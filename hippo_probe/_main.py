@@ -25,9 +25,9 @@ def add_commands(sub):
     sizes = ("tiny", "full", "paper")
     size_help = ("data size, per shipped run (a world's training seed), from scratch on 2 "
                  "quiet cores: full, 200 test trials, a few minutes in all; paper, the "
-                 "study's scale: 1,000 test trials and PF-SLAM on 100, about 6 minutes "
-                 "for a world's first run on one core and 2.2 for its others, which reuse "
-                 "its reference filters (8.5 minutes for the four shipped runs, two at "
+                 "study's scale: 1,000 test trials and PF-SLAM on 100, about 5 minutes "
+                 "for a world's first run on one core and 2.3 for its others, which reuse "
+                 "its reference filters (under 8 minutes for the four shipped runs, two at "
                  "once); "
                  "tiny, a smoke test of a handful of trials")
     cache_help = ("folder of the cached recordings, reused by later runs of the same size "

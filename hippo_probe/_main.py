@@ -27,8 +27,8 @@ def add_commands(sub):
                  "quiet cores: full, 200 test trials, a few minutes in all; paper, the "
                  "study's scale: 1,000 test trials and PF-SLAM on 100, about 5 minutes "
                  "for a world's first run on one core and 2.3 for its others, which reuse "
-                 "its reference filters (under 8 minutes for the four shipped runs, two at "
-                 "once); "
+                 "its reference filters (about 8 minutes for the four shipped runs, two "
+                 "at once); "
                  "tiny, a smoke test of a handful of trials")
     cache_help = ("folder of the cached recordings, reused by later runs of the same size "
                   "(default: OUT/cache)")

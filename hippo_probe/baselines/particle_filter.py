@@ -604,12 +604,15 @@ def _intermediate_check(f, heading, turn, walls, block, xs, ys, xe, ye, eta, are
     touch range of a wall is multiplied by the probability of not heading into that wall
     (the heading then ``heading - (1 - f) turn``, less the particle's drift).
 
-    Only particles that could be that near are looked at: a point ``g`` from the chord's
-    end is at least ``end_distance - g`` from every wall, so a particle with
-    ``end_distance - g`` beyond the touch range (by a nanometre, for rounding) keeps the
-    likelihood the full check would leave it. The others are gathered, arena by arena
-    (``block``; particles sorted by arena), into ``near, xm, ym``; ``best, nearest,
-    crossings`` are scratch space for their walls.
+    ``walls (A, V, 8)`` are the arenas' wall tables, ``block (A + 1,)`` the bounds of
+    each arena's particles (sorted by arena) and ``end_distance`` each particle's distance
+    from ``(xe, ye)`` to the nearest wall of its arena. Only particles that could be within
+    the touch range are looked at: a point ``g`` from the chord's end is at least
+    ``end_distance - g`` from every wall, so a particle with ``end_distance - g`` beyond
+    the touch range (by a nanometre, for rounding; enough for coordinates up to
+    kilometres) keeps the likelihood the full check would leave it. The others are
+    gathered, arena by arena, into ``near, xm, ym``; ``best, nearest, crossings`` are
+    scratch space for their walls.
     """
     back = heading - (1.0 - f) * turn
     reach = touch_range + 1e-9
@@ -735,24 +738,29 @@ def _wall_distance(wall, px, py):
 @numba.njit(cache=True, nogil=True)
 def _contact_likelihood(walls, heading, angle, path_length, contact_args, distance, eta,
                         xs, ys, xe, ye, lik):
-    """``lik[i] = sum_k p(beta | k, heading - eta_i) N(d; d_ik, sd_ik^2)`` for particles
+    r"""``lik[i] = sum_k p(beta | k, heading - eta_i) N(d; d_ik, sd_ik^2)`` for particles
     moving from ``(xs, ys)`` to ``(xe, ye)`` in one arena (``walls (V, 8)``), ``d_ik`` the
     apex of their V against wall ``k`` (:mod:`~hippo_probe.baselines.contact`). Walls
     beyond the angle cutoff, and walls the path stays more than ``_BAND`` s.d. beyond
     the sensed distance, are skipped (their terms are below 1e-14 of the peak).
 
-    The second test needs the wall's terms, but a bound on them settles most walls: as
-    ``reach <= path_length`` and ``sd`` is at most its value at the larger of the two
-    spreads, a wall farther from the path's end than ``distance + path_length + _BAND
-    sd_max`` (plus a nanometre for rounding) fails it, and is skipped before its
-    exponential and trigonometry are computed; the sums are those of every wall.
-    Particles with the same heading as the one before (every particle in the compass
-    world, whose drift hypotheses stay 0) reuse its walls' terms."""
+    The second test needs the wall's terms, but a bound on them settles most walls:
+    ``|reach| <= |path_length|``, and ``sd`` is at most ``sd_max``, its value with the
+    spread :math:`\epsilon^2 \cos^2\beta + v_\beta \sin^2\beta` replaced by
+    :math:`\max(\epsilon^2, v_\beta)`. So a wall farther from the path's end than
+    ``distance + |path_length| + _BAND sd_max`` cannot explain the sensed distance within
+    ``_BAND`` s.d. and fails the test; it is skipped before its exponential and
+    trigonometry are computed, and the sums equal those over every wall. The bound is
+    widened by a nanometre and 1e-12 of itself for rounding (enough for coordinates up to
+    kilometres). Particles with the same heading as the one before (every particle of the
+    compass world when the start heading is known: their drift hypotheses stay 0) reuse
+    its walls' terms."""
     angle_obs_var, angle_wall_var, distance_var, path_length_error, cutoff = contact_args
     beta_var = angle_obs_var * angle_wall_var / (angle_obs_var + angle_wall_var)
     sd_max = math.sqrt(distance_var + 0.25 * path_length ** 2
                        * max(path_length_error ** 2, beta_var))
-    too_far = distance + path_length + _BAND * sd_max + 1e-9
+    too_far = distance + abs(path_length) + _BAND * sd_max
+    too_far += 1e-9 + 1e-12 * abs(too_far)
     n_walls = walls.shape[0]
     terms = np.empty((n_walls, 3))
     terms_of = np.full(n_walls, -1)     # the particle whose heading the terms are for

@@ -390,6 +390,34 @@ def test_shared_arrays_are_made_once_for_every_run_of_a_world(tmp_path):
     assert other_world["estimate"][0] == 3.0 and other_trials["estimate"][0] == 4.0
 
 
+def test_a_data_set_of_anothers_network_and_trials_is_read_from_its_recording(
+        tmp_path, monkeypatch):
+    """Where fig4's ``specialized_many`` is fig3's ``specialized`` without baselines (the
+    same network on the same trials, as at the paper's size), it is read from that
+    recording, identical to recording it afresh, without running the network again;
+    with other trials, or before the other is recorded, it is recorded."""
+    import hippo_probe as hp
+    from hippo_probe.paper.config import CONFIGS, recording, with_cache
+
+    same = replace(CONFIGS["tiny"], trials=6, remap_trials=6)
+    fresh = recording("specialized_many", with_cache(same, tmp_path / "fresh"))
+    shared = with_cache(same, tmp_path / "shared")
+    with_baselines = recording("specialized", shared)
+    assert "estimate_pf" in with_baselines
+
+    def no_second_pass(*args, **kwargs):
+        raise AssertionError("the network was run again")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(hp, "record", no_second_pass)
+        derived = recording("specialized_many", shared)
+    assert derived.load().identical(fresh.load())
+    assert not (shared.cache / "specialized_many.zarr").exists()
+
+    other = with_cache(replace(same, remap_trials=4), tmp_path / "shared")
+    assert recording("specialized_many", other).sizes["trial_id"] == 4
+
+
 def test_runs_made_at_once_wait_for_the_shared_arrays_instead_of_making_them_twice(
         tmp_path):
     import threading

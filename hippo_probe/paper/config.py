@@ -222,22 +222,67 @@ RECORDINGS = {
 }
 
 
-def recording(name: str, cfg: FigureConfig):
-    """A cached recording of the paper's data set ``name`` (see :data:`RECORDINGS`)."""
-    network, task, overrides, which, size_attr = RECORDINGS[name]
-    network = cfg.network(network)
-    n_trials = getattr(cfg, size_attr)
-    net_path = network_file(network, cfg.network_seed)
-    key = _digest(net_path.read_bytes(), name, n_trials, cfg.particles, cfg.seed,
-                  sorted(overrides.items()), which, code_version())
+def _recording_key(name: str, cfg: FigureConfig) -> str:
+    """What the data set ``name``'s recording depends on: its network file, trials,
+    baselines and this code."""
+    network, _, overrides, which, size_attr = RECORDINGS[name]
+    net_path = network_file(cfg.network(network), cfg.network_seed)
+    return _digest(net_path.read_bytes(), name, getattr(cfg, size_attr), cfg.particles,
+                   cfg.seed, sorted(overrides.items()), which, code_version())
+
+
+def _cached_recording(name: str, cfg: FigureConfig):
+    """The data set ``name``'s recording in ``cfg.cache``, if there and current; else
+    None."""
     path = cfg.cache / f"{name}.zarr"
     if path.exists():
         try:
             rec = hp.open_recording(path)
-            if rec.attrs.get("paper_key") == key:
+            if rec.attrs.get("paper_key") == _recording_key(name, cfg):
                 return rec
         except ValueError:
             pass            # unreadable or half-written: rebuild it
+    return None
+
+
+def _without_baselines(name: str, cfg: FigureConfig):
+    """The data set ``name``, which has no baselines, read from the cached recording of
+    another data set of the same network on the same trials, its baselines dropped (at
+    the paper's size, fig4's ``specialized_many`` is fig3's ``specialized``): the network
+    is not run and saved again. None when no such recording is cached."""
+    from hippo_probe.model.record import BASELINE_VARIABLES
+
+    network, task, overrides, which, size_attr = RECORDINGS[name]
+    if which:
+        return None
+    for other, (network_, task_, overrides_, _, size_attr_) in RECORDINGS.items():
+        if other == name or (network_, task_, overrides_) != (network, task, overrides) \
+                or getattr(cfg, size_attr_) != getattr(cfg, size_attr):
+            continue
+        rec = _cached_recording(other, cfg)
+        if rec is not None:
+            rec = rec.drop_vars([v for v in BASELINE_VARIABLES if v in rec])
+            if "cov" in rec.coords:
+                rec = rec.drop_vars("cov")
+            rec.attrs.update(session_id=f"paper-{name}-{cfg.run}",
+                             paper_key=_recording_key(name, cfg), paper_dataset=name)
+            return rec
+    return None
+
+
+def recording(name: str, cfg: FigureConfig):
+    """A cached recording of the paper's data set ``name`` (see :data:`RECORDINGS`)."""
+    rec = _cached_recording(name, cfg)
+    if rec is None:
+        rec = _without_baselines(name, cfg)
+    if rec is not None:
+        return rec
+    network, task, overrides, which, size_attr = RECORDINGS[name]
+    network = cfg.network(network)
+    n_trials = getattr(cfg, size_attr)
+    net_path = network_file(network, cfg.network_seed)
+    key = _recording_key(name, cfg)
+    path = cfg.cache / f"{name}.zarr"
     t0 = time.time()
     net = hp.load_pretrained(net_path)
     if net.world != cfg.world:

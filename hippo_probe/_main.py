@@ -26,7 +26,7 @@ def add_commands(sub):
     size_help = ("data size, per shipped run (a world's training seed), from scratch on 2 "
                  "quiet cores: full, 200 test trials, a few minutes in all; paper, the "
                  "study's scale: 1,000 test trials and PF-SLAM on 100, about 5 minutes "
-                 "for a world's first run on one core and 2.3 for its others, which reuse "
+                 "for a world's first run on one core and 2.1 for its others, which reuse "
                  "its reference filters (about 8 minutes for the four shipped runs, two "
                  "at once); "
                  "tiny, a smoke test of a handful of trials")

@@ -396,6 +396,10 @@ def test_a_data_set_of_anothers_network_and_trials_is_read_from_its_recording(
     same network on the same trials, as at the paper's size), it is read from that
     recording, identical to recording it afresh, without running the network again;
     with other trials, or before the other is recorded, it is recorded."""
+    import shutil
+
+    import zarr
+
     import hippo_probe as hp
     from hippo_probe.paper.config import CONFIGS, recording, with_cache
 
@@ -404,6 +408,10 @@ def test_a_data_set_of_anothers_network_and_trials_is_read_from_its_recording(
     shared = with_cache(same, tmp_path / "shared")
     with_baselines = recording("specialized", shared)
     assert "estimate_pf" in with_baselines
+    stale = shared.cache / "specialized_many.zarr"     # one made by other code: removed
+    shutil.copytree(with_cache(same, tmp_path / "fresh").cache / "specialized_many.zarr",
+                    stale)
+    zarr.open_group(str(stale), mode="r+").attrs["paper_key"] = "made by other code"
 
     def no_second_pass(*args, **kwargs):
         raise AssertionError("the network was run again")
@@ -411,8 +419,9 @@ def test_a_data_set_of_anothers_network_and_trials_is_read_from_its_recording(
     with monkeypatch.context() as patch:
         patch.setattr(hp, "record", no_second_pass)
         derived = recording("specialized_many", shared)
+    assert derived.chunks == fresh.chunks
     assert derived.load().identical(fresh.load())
-    assert not (shared.cache / "specialized_many.zarr").exists()
+    assert not stale.exists()
 
     other = with_cache(replace(same, remap_trials=4), tmp_path / "shared")
     assert recording("specialized_many", other).sizes["trial_id"] == 4

@@ -19,6 +19,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import shutil
 import time
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
@@ -223,8 +224,9 @@ RECORDINGS = {
 
 
 def _recording_key(name: str, cfg: FigureConfig) -> str:
-    """What the data set ``name``'s recording depends on: its network file, trials,
-    baselines and this code."""
+    """What the data set ``name``'s recording depends on: its network file, its trials
+    (their number, seed and task overrides), its baselines and their particles, and this
+    code."""
     network, _, overrides, which, size_attr = RECORDINGS[name]
     net_path = network_file(cfg.network(network), cfg.network_seed)
     return _digest(net_path.read_bytes(), name, getattr(cfg, size_attr), cfg.particles,
@@ -245,36 +247,52 @@ def _cached_recording(name: str, cfg: FigureConfig):
     return None
 
 
-def _without_baselines(name: str, cfg: FigureConfig):
+def _session_id(name: str, cfg: FigureConfig) -> str:
+    return f"paper-{name}-{cfg.run}"
+
+
+def _from_another_recording(name: str, cfg: FigureConfig):
     """The data set ``name``, which has no baselines, read from the cached recording of
-    another data set of the same network on the same trials, its baselines dropped (at
-    the paper's size, fig4's ``specialized_many`` is fig3's ``specialized``): the network
-    is not run and saved again. None when no such recording is cached."""
+    another data set of the same network on the same trials, with that one's baselines
+    dropped and this one's attributes: the network is not run and saved again. At the
+    paper's size fig4's ``specialized_many`` is fig3's ``specialized``. None when no such
+    recording is cached.
+
+    The data set returned reads the other's store lazily: removing or rewriting that
+    store while it is in use (another process making figures in the same cache with other
+    code) makes its reads fail with an error.
+    """
     from hippo_probe.model.record import BASELINE_VARIABLES
 
     network, task, overrides, which, size_attr = RECORDINGS[name]
     if which:
         return None
-    for other, (network_, task_, overrides_, _, size_attr_) in RECORDINGS.items():
-        if other == name or (network_, task_, overrides_) != (network, task, overrides) \
-                or getattr(cfg, size_attr_) != getattr(cfg, size_attr):
-            continue
-        rec = _cached_recording(other, cfg)
+    for other, (other_network, other_task, other_overrides, _, other_size_attr) in \
+            RECORDINGS.items():
+        same_trials = ((other_network, other_task, other_overrides)
+                       == (network, task, overrides)
+                       and getattr(cfg, other_size_attr) == getattr(cfg, size_attr))
+        rec = _cached_recording(other, cfg) if other != name and same_trials else None
         if rec is not None:
+            # a stale store of this data set would have been overwritten by a new
+            # recording; nothing will read it now
+            shutil.rmtree(cfg.cache / f"{name}.zarr", ignore_errors=True)
             rec = rec.drop_vars([v for v in BASELINE_VARIABLES if v in rec])
             if "cov" in rec.coords:
                 rec = rec.drop_vars("cov")
-            rec.attrs.update(session_id=f"paper-{name}-{cfg.run}",
+            rec.attrs.update(session_id=_session_id(name, cfg),
                              paper_key=_recording_key(name, cfg), paper_dataset=name)
             return rec
     return None
 
 
 def recording(name: str, cfg: FigureConfig):
-    """A cached recording of the paper's data set ``name`` (see :data:`RECORDINGS`)."""
+    """A cached recording of the paper's data set ``name`` (see :data:`RECORDINGS`):
+    its own, or one of the same network on the same trials with more baselines
+    (:func:`_from_another_recording`), else recorded now."""
     rec = _cached_recording(name, cfg)
     if rec is None:
-        rec = _without_baselines(name, cfg)
+        rec = _from_another_recording(name, cfg)
     if rec is not None:
         return rec
     network, task, overrides, which, size_attr = RECORDINGS[name]
@@ -294,7 +312,7 @@ def recording(name: str, cfg: FigureConfig):
                           lambda: baseline_estimates(batch, which, cfg.particles),
                           batch_digest(batch), which, cfg.particles) if which else None
     rec = hp.record(net, batch, baselines=extra, checkpoint=net_path.name, config=config,
-                    session_id=f"paper-{name}-{cfg.run}")
+                    session_id=_session_id(name, cfg))
     rec.attrs["paper_key"] = key
     rec.attrs["paper_dataset"] = name
     cfg.cache.mkdir(parents=True, exist_ok=True)

@@ -9,15 +9,18 @@ import uuid
 import warnings
 from pathlib import Path
 
+import dask.array as da
 import numpy as np
 import xarray as xr
 import zarr
 from dask.array.core import getter as dask_getter
+from dask.base import tokenize
 from zarr.codecs import BloscCodec, Crc32cCodec
 
 from .._atomic import OLD, atomic_path, remove_stale
 from .._validators import check_bool, check_path
 from ..errors import RecordingError
+from .chunk_files import ChunkFiles
 from .config import COMPLETE_MARKER, DEFAULTS
 from .layout import is_trial_aligned, trial_aligned_chunks, trial_blocks
 from .validate import check_block, validate
@@ -320,7 +323,8 @@ def _check_complete(path, storage_options):
                                      f"chunk deleted, replaced or copied from elsewhere)")
 
 
-def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAULTS):
+def open_recording(path, chunks="trials", *, direct_io="auto", storage_options=None,
+                   config=DEFAULTS):
     """Open a recording saved by :func:`save_recording`, lazily.
 
     Data variables are dask arrays (nothing is read until computed); all coords, among
@@ -343,6 +347,12 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     metadata as a replacement; a network file system may show another client's
     replacement only after its attribute cache expires.
 
+    The data variables of a local store in the layout :func:`save_recording` writes are
+    read one chunk file at a time (:class:`~hippo_probe.recording.chunk_files.ChunkFiles`:
+    CRC32C check and Blosc decoding by the libraries zarr calls, without zarr's
+    event-loop thread, which keeps dask's threads waiting on each other): the same
+    values, about twice as fast on two cores. Other stores are read through zarr.
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -351,6 +361,13 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
         ``"trials"`` (default): dask chunks along ``time`` that never straddle two
         trials (whole trials, up to ``config.chunk_bytes`` per chunk). Otherwise passed
         to :func:`xarray.open_zarr` (``{}`` = the stored chunks; ``None`` = no dask).
+    direct_io : bool or "auto"
+        Read chunk files around the operating system's page cache (``O_DIRECT``, Linux;
+        elsewhere, and on file systems without it, through the cache). It halves the
+        processor time of a read from the disk, but a second read finds nothing cached.
+        ``"auto"`` (default): only when the data variables are larger than the memory
+        available when opening (``MemAvailable``), since the cache could not keep them
+        for a second read anyway. ``True`` suits a recording read once.
     storage_options : dict, optional
         fsspec options for a URL.
     config : RecordingConfig
@@ -369,6 +386,9 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
             or isinstance(chunks, bool):
         raise ValueError(f"`chunks` must be 'trials', a dict of chunk sizes per dimension, "
                          f"an int or None; got {chunks!r}")
+    if not (isinstance(direct_io, (bool, np.bool_)) or (isinstance(direct_io, str)
+                                                        and direct_io == "auto")):
+        raise ValueError(f"`direct_io` must be True, False or 'auto'; got {direct_io!r}")
     sizes = chunks.values() if isinstance(chunks, dict) else [chunks]
     for size in sizes:
         if isinstance(size, bool) or (isinstance(size, (int, np.integer)) and size < 1):
@@ -388,11 +408,11 @@ def open_recording(path, chunks="trials", *, storage_options=None, config=DEFAUL
     guard = None if _is_url(path) else StoreGuard(path)
     storage = {} if chunks == "trials" else chunks
     try:
-        rec = _open(path, storage, storage_options, guard)
+        rec = _open(path, storage, storage_options, guard, direct_io)
         if chunks == "trials":
             aligned = _trial_chunks(rec, config)
             if aligned is not None:
-                rec = _open(path, {"time": aligned}, storage_options, guard)
+                rec = _open(path, {"time": aligned}, storage_options, guard, direct_io)
     except RecordingError:
         raise
     except Exception as err:
@@ -507,7 +527,7 @@ def _slices(index) -> str:
     return "[" + ", ".join(parts) + "]"
 
 
-def _open(path, chunks, storage_options, guard=None):
+def _open(path, chunks, storage_options, guard=None, direct_io=False):
     getitem = functools.partial(_read_chunk, path, guard)
     with warnings.catch_warnings():
         # trial-aligned dask chunks may cut stored chunks; intended (see open_recording)
@@ -516,10 +536,63 @@ def _open(path, chunks, storage_options, guard=None):
                            from_array_kwargs={"getitem": getitem},
                            **_OPEN_KW)
     rec.attrs.pop(COMPLETE_MARKER, None)
+    if guard is not None:
+        rec = _read_by_chunk_files(rec, path, getitem, direct_io)
     # string coords come back as numpy's StringDType; in memory (from_arrays, from_nwb,
     # record) they are object arrays of str: one layout, so the same dtype
     return rec.assign_coords({name: _object_strings(coord.variable.load())
                               for name, coord in rec.coords.items()})
+
+
+def _read_by_chunk_files(rec, path, getitem, direct_io):
+    """``rec`` with each lazy data variable whose stored layout :class:`ChunkFiles` covers
+    read through it instead of zarr's event loop: the same dask chunks, values, attrs and
+    encoding. ``direct_io``: True, False or "auto" (see :func:`open_recording`)."""
+    group = zarr.open_group(path, mode="r")
+    readers = {}
+    for name, var in rec.data_vars.items():
+        if var.chunks is None or not _decodes_as_stored(var):
+            continue
+        array = group.get(name)
+        files = ChunkFiles.of(os.path.join(path, name), name, array) \
+            if isinstance(array, zarr.Array) else None
+        if files is not None and files.dtype == var.dtype and files.shape == var.shape:
+            readers[name] = files
+    if direct_io == "auto":
+        direct_io = sum(rec[name].nbytes for name in readers) > available_memory()
+    faster = {}
+    for name, files in readers.items():
+        files.direct_io = direct_io
+        var = rec[name]
+        data = da.from_array(files, chunks=var.data.chunks, getitem=getitem,
+                             name=f"read-{name}-{tokenize(var.data.name, direct_io)}",
+                             meta=np.empty((0,) * var.ndim, var.dtype))
+        faster[name] = var.copy(data=data)
+    return rec.assign(faster)
+
+
+def available_memory() -> float:
+    """Bytes of memory available now without swapping (Linux's ``MemAvailable``: free
+    memory plus the page cache that can be dropped); infinite where it cannot be read."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return float("inf")
+
+
+def _decodes_as_stored(var) -> bool:
+    """Whether xarray's decoding leaves ``var``'s values as stored: no scale or offset,
+    and no fill value to mask but NaN in a float array (masking NaN changes nothing)."""
+    encoding = var.encoding
+    if any(key in encoding for key in ("scale_factor", "add_offset", "_Unsigned",
+                                       "missing_value")):
+        return False
+    fill = encoding.get("_FillValue")
+    return fill is None or (var.dtype.kind == "f" and bool(np.isnan(fill)))
 
 
 def _object_strings(var):

@@ -6,9 +6,9 @@ same chunks are decoded directly (zarr-python issue #2710). For the layout
 :func:`~hippo_probe.recording.save_recording` writes (a regular grid chunked along the
 first dimension only, little-endian bytes, Blosc, a CRC32C checksum, zarr's default chunk
 keys), :class:`ChunkFiles` reads a chunk's file, checks its checksum with google-crc32c and
-decodes it with numcodecs' Blosc: the libraries zarr itself calls for these codecs, without
-the event loop. Any other array (other codecs, sharding, chunks across another dimension,
-a URL) is read through zarr as before.
+decodes it with numcodecs' Blosc (the codec zarr's Blosc wraps), without the event loop.
+Any other array (other codecs, sharding, chunks across another dimension, a URL) is read
+through zarr as before.
 
 A chunk file is read through the page cache, or around it (``O_DIRECT``, Linux): the
 kernel then moves the bytes from the disk into this process's buffer without filling and
@@ -38,18 +38,35 @@ _buffers = threading.local()     # one page-aligned buffer per thread for O_DIRE
 
 
 def _aligned_buffer(nbytes) -> mmap.mmap:
-    """This thread's page-aligned buffer of at least ``nbytes`` (whole pages), reused."""
+    """This thread's page-aligned buffer of at least ``nbytes`` (whole pages), reused.
+
+    An anonymous mapping is shared with a forked child, so a child makes its own rather
+    than writing into its parent's."""
     size = max(_PAGE, -(-nbytes // _PAGE) * _PAGE)
     buffer = getattr(_buffers, "buffer", None)
-    if buffer is None or len(buffer) < size:
+    if buffer is None or len(buffer) < size or _buffers.pid != os.getpid():
         buffer = _buffers.buffer = mmap.mmap(-1, size)
+        _buffers.pid = os.getpid()
     return buffer
 
 
+def _read_direct(fd, most) -> np.ndarray:
+    """Read the file ``fd`` (opened with ``O_DIRECT``) into this thread's buffer, up to its
+    end or the buffer's (``most + 1`` bytes rounded up to whole pages)."""
+    buffer = _aligned_buffer(most + 1)
+    view, done = memoryview(buffer), 0
+    while done < len(buffer):
+        n = os.preadv(fd, [view[done:]], done)   # short only at the end (or EINVAL)
+        if n == 0:
+            break
+        done += n
+    return np.frombuffer(buffer, np.uint8, count=done)
+
+
 def _read_file(path, most, direct) -> np.ndarray:
-    """The bytes of the file ``path`` (at most ``most + 1`` of them), read through the page
-    cache, or around it (``O_DIRECT``) when ``direct`` and the file system allows it; in
-    that case a view of this thread's buffer, valid until the thread's next read."""
+    """The bytes of the file ``path``, at most ``most + 1`` of them (through the page cache)
+    or a few more (a whole page, around it: ``O_DIRECT``, when ``direct`` and the file
+    system allows it; then a view of this thread's buffer, valid until its next read)."""
     if direct and hasattr(os, "O_DIRECT"):
         try:
             fd = os.open(path, os.O_RDONLY | os.O_DIRECT)
@@ -58,8 +75,7 @@ def _read_file(path, most, direct) -> np.ndarray:
                 raise
         else:
             try:
-                buffer = _aligned_buffer(most + 1)
-                return np.frombuffer(buffer, np.uint8, count=os.readv(fd, [buffer]))
+                return _read_direct(fd, most)
             except OSError as err:
                 if err.errno != errno.EINVAL:
                     raise
@@ -80,15 +96,18 @@ class ChunkFiles:
     (``prod(chunk_shape) · itemsize`` plus Blosc's 16-byte header and the 4-byte checksum);
     a longer or shorter file, a checksum that does not match (CRC32C of everything before
     the last 4 bytes, little-endian, as zarr's ``crc32c`` codec writes it) or a Blosc
-    frame that does not decode to exactly one chunk raises ``ValueError``. A chunk file
+    frame that does not decode, or not to exactly one chunk, raises ``ValueError``. A chunk file
     that is missing raises ``FileNotFoundError`` (zarr would return its fill value;
     :func:`~hippo_probe.recording.open_recording` has already checked that every chunk
     was written). Chunks at the end of the array are stored whole, padded, as zarr
     writes them.
 
     With ``direct_io`` the files are read around the page cache (``O_DIRECT``) where the
-    file system allows it (elsewhere, e.g. tmpfs, through it): cheaper for data read once
-    or larger than memory, slower for data read again while still cached.
+    file system allows it (elsewhere, as on some network file systems, through it):
+    cheaper for data read once or larger than memory, slower for data read again while
+    it would still be cached. A chunk that two requests share (dask chunks cutting stored
+    ones, as trial-aligned chunks of unequal trials do) is then read from the disk twice.
+    Each thread keeps one page-aligned buffer as large as the largest chunk it read.
 
     Parameters
     ----------
@@ -140,7 +159,7 @@ class ChunkFiles:
             return None
         chunks = tuple(getattr(meta.chunk_grid, "chunk_shape", ()) or ())
         if len(chunks) != array.ndim or chunks[1:] != tuple(array.shape[1:]) \
-                or chunks[0] < 1:
+                or 0 in chunks:
             return None
         return cls(folder, name, array.shape, chunks, dtype, direct_io)
 
@@ -154,7 +173,8 @@ class ChunkFiles:
         most = self._chunk_nbytes + _BLOSC_MAX_OVERHEAD + _CRC_BYTES
         data = _read_file(path, most, self.direct_io)
         if not _CRC_BYTES + _BLOSC_MAX_OVERHEAD <= data.size <= most:
-            raise ValueError(f"chunk file {path} holds {data.size} bytes; a chunk of "
+            size = f"more than {most}" if data.size > most else str(data.size)
+            raise ValueError(f"chunk file {path} holds {size} bytes; a chunk of "
                              f"{self.chunk_shape} {self.dtype} holds "
                              f"{_CRC_BYTES + _BLOSC_MAX_OVERHEAD} to {most}")
         body = data[:-_CRC_BYTES]
@@ -170,24 +190,31 @@ class ChunkFiles:
                              f"in {cbytes}; a chunk is {self._chunk_nbytes} bytes in a "
                              f"file of {body.size} before the checksum")
         out = np.empty(self.chunk_shape, self.dtype)
-        self._blosc.decode(body, out=out)
+        try:
+            self._blosc.decode(body, out=out)
+        except RuntimeError as err:                  # numcodecs: "error during blosc ..."
+            raise ValueError(f"chunk file {path}: its Blosc frame does not decode "
+                             f"({err})") from err
         return out
 
     def __getitem__(self, index):
         index = index if isinstance(index, tuple) else (index,)
         if len(index) != self.ndim or not all(isinstance(s, slice) for s in index):
             raise TypeError(f"ChunkFiles takes one slice per dimension; got {index!r}")
-        start, stop, step = index[0].indices(self.shape[0])
-        rest = index[1:]
-        length = self.chunk_shape[0]
-        if step != 1:
-            return self[(slice(start, stop),) + rest][::step]
-        if stop <= start:
+        rows, rest = range(*index[0].indices(self.shape[0])), index[1:]
+        if not rows:
             return np.empty((0,) + self.shape[1:], self.dtype)[(slice(None),) + rest]
+        start, stop = min(rows[0], rows[-1]), max(rows[0], rows[-1]) + 1
+        if rows.step != 1:
+            return self[(slice(start, stop),) + rest][rows[0] - start::rows.step]
+        length = self.chunk_shape[0]
         first, last = start // length, (stop - 1) // length
-        if first == last:          # the usual case: within one chunk, no copy
+        if first == last:          # the usual case: one chunk, whole, without a copy
             offset = first * length
-            return self.chunk(first)[(slice(start - offset, stop - offset),) + rest]
+            chunk = self.chunk(first)
+            block = chunk[(slice(start - offset, stop - offset),) + rest]
+            # a part is copied: a view would keep the whole chunk alive with it
+            return block if block.nbytes == chunk.nbytes else block.copy()
         parts = []
         for i in range(first, last + 1):
             offset = i * length

@@ -86,8 +86,12 @@ def test_slices_within_and_across_chunks_and_with_steps(tmp_path):
     files = ChunkFiles.of(str(tmp_path / "a.zarr"), "a", array)
     for index in [(slice(0, 10), slice(0, 3)), (slice(95, 103), slice(1, 2)),
                   (slice(5, 67), slice(None)), (slice(None), slice(None)),
-                  (slice(3, 90, 7), slice(0, 3, 2)), (slice(40, 40), slice(None))]:
+                  (slice(3, 90, 7), slice(0, 3, 2)), (slice(40, 40), slice(None)),
+                  (slice(None, None, -1), slice(None)), (slice(20, 3, -3), slice(2, 0, -1)),
+                  (slice(3, 20, -1), slice(None))]:
         np.testing.assert_array_equal(files[index], data[index], str(index))
+    part = files[2:5, :]
+    assert part.base is None or part.base.nbytes == part.nbytes   # not a whole chunk kept
     with pytest.raises(TypeError, match="one slice per dimension"):
         files.__getitem__(3)
 
@@ -111,10 +115,16 @@ def _declare_more(body):
     return body
 
 
+def _garble_frame(body):
+    body[-64:] = bytes(64)           # the header still declares a whole chunk
+    return body
+
+
 DAMAGE = {
     "a flipped byte": (_flip, "CRC32C checksums do not match"),
+    "a frame that does not decode": (lambda p: _rewrite(p, _garble_frame), "does not decode"),
     "cut short": (lambda p: p.write_bytes(p.read_bytes()[:10]), "holds 10 bytes"),
-    "bytes appended": (lambda p: _rewrite(p, lambda b: b + bytes(2**16)), "holds"),
+    "bytes appended": (lambda p: _rewrite(p, lambda b: b + bytes(2**16)), "holds more than"),
     "a frame of another size": (lambda p: _rewrite(p, _declare_more), "declares"),
     "removed": (lambda p: p.unlink(), "No such file"),
 }
@@ -147,13 +157,53 @@ def test_without_o_direct_the_file_is_read_through_the_page_cache(tmp_path, monk
     np.testing.assert_array_equal(_bytes(got), _bytes(expected))
 
 
-@pytest.mark.parametrize("available, direct", [(0.0, True), (float("inf"), False)])
+@pytest.mark.parametrize("available, direct", [(0.0, True), (float("inf"), False),
+                                               ("between", False)])
 def test_auto_reads_around_the_cache_only_what_memory_cannot_hold(available, direct, tmp_path,
                                                                    monkeypatch, chunk_reads):
-    path = _network_store(tmp_path)
+    rec = make_network_recording(n_trials=7, n_units=200)
+    rec["activity"] = rec.activity * (rec.activity > 0.99)   # sparse: compresses well
+    path = tmp_path / "r.zarr"
+    save_recording(rec, path, config=RecordingConfig(chunk_bytes=64_000))
+    stored = sum(f.stat().st_size for name in rec.data_vars
+                 for f in (path / name / "c").rglob("*") if f.is_file())
+    if available == "between":      # the files fit, the decoded arrays would not
+        decoded = sum(var.nbytes for var in rec.data_vars.values())
+        assert stored < decoded / 2
+        available = (stored + decoded) / 2
     monkeypatch.setattr(store, "available_memory", lambda: available)
-    open_recording(path, config=SMALL).activity.load()
+    open_recording(path).activity.load()
     assert any(flags & os.O_DIRECT for flags in chunk_reads["flags"]) == direct
+
+
+def test_a_forked_child_reads_into_its_own_buffer(tmp_path):
+    """The O_DIRECT buffer is shared memory: a child must not write into its parent's."""
+    path = _network_store(tmp_path)
+    files = ChunkFiles.of(str(path / "activity"), "activity",
+                          zarr.open_array(str(path / "activity"), mode="r"), direct_io=True)
+    files.chunk(0)
+    parents = chunk_files._aligned_buffer(1)
+    before = bytes(parents[:4096])
+    pid = os.fork()
+    if pid == 0:                                   # the child: read another chunk, leave
+        code = 0
+        try:
+            files.chunk(1)
+            code = 3 if chunk_files._aligned_buffer(1) is parents else 0
+        finally:
+            os._exit(code)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0
+    assert bytes(parents[:4096]) == before
+
+
+def test_a_store_in_another_layout_is_read_by_zarr(tmp_path, chunk_reads):
+    """Saved without checksums, no variable fits the chunk-file reader: zarr reads them."""
+    rec = make_network_recording(n_trials=7)
+    path = tmp_path / "r.zarr"
+    save_recording(rec, path, config=RecordingConfig(chunk_bytes=4000, checksum=False))
+    xr.testing.assert_identical(open_recording(path, config=SMALL).load(), rec)
+    assert chunk_reads["names"] == set()
 
 
 @pytest.mark.parametrize("value", ["yes", 1, None])

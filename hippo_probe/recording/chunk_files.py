@@ -135,7 +135,7 @@ class ChunkFiles:
         self._blosc = numcodecs.Blosc()        # decoding reads the codec from each frame
 
     @classmethod
-    def of(cls, folder, name, array: zarr.Array, direct_io=False) -> ChunkFiles | None:
+    def of(cls, folder, name, array: zarr.Array) -> ChunkFiles | None:
         """A reader for ``array``, the zarr array ``name`` in the folder ``folder``, or
         None when its layout is not the one :func:`save_recording` writes."""
         meta = array.metadata
@@ -161,7 +161,7 @@ class ChunkFiles:
         if len(chunks) != array.ndim or chunks[1:] != tuple(array.shape[1:]) \
                 or 0 in chunks:
             return None
-        return cls(folder, name, array.shape, chunks, dtype, direct_io)
+        return cls(folder, name, array.shape, chunks, dtype)
 
     def __repr__(self):
         return (f"ChunkFiles({self.folder!r}, shape={self.shape}, chunks={self.chunk_shape}, "

@@ -412,11 +412,13 @@ def open_recording(path, chunks="trials", *, direct_io="auto", storage_options=N
     guard = None if _is_url(path) else StoreGuard(path)
     storage = {} if chunks == "trials" else chunks
     try:
-        rec = _open(path, storage, storage_options, guard, direct_io)
+        rec = _open(path, storage, storage_options, guard)
         if chunks == "trials":
             aligned = _trial_chunks(rec, config)
             if aligned is not None:
-                rec = _open(path, {"time": aligned}, storage_options, guard, direct_io)
+                rec = _open(path, {"time": aligned}, storage_options, guard)
+        if guard is not None:                  # a local store
+            rec = _read_by_chunk_files(rec, path, guard, direct_io)
     except RecordingError:
         raise
     except Exception as err:
@@ -531,7 +533,7 @@ def _slices(index) -> str:
     return "[" + ", ".join(parts) + "]"
 
 
-def _open(path, chunks, storage_options, guard=None, direct_io=False):
+def _open(path, chunks, storage_options, guard=None):
     getitem = functools.partial(_read_chunk, path, guard)
     with warnings.catch_warnings():
         # trial-aligned dask chunks may cut stored chunks; intended (see open_recording)
@@ -540,18 +542,18 @@ def _open(path, chunks, storage_options, guard=None, direct_io=False):
                            from_array_kwargs={"getitem": getitem},
                            **_OPEN_KW)
     rec.attrs.pop(COMPLETE_MARKER, None)
-    if guard is not None:
-        rec = _read_by_chunk_files(rec, path, getitem, direct_io)
     # string coords come back as numpy's StringDType; in memory (from_arrays, from_nwb,
     # record) they are object arrays of str: one layout, so the same dtype
     return rec.assign_coords({name: _object_strings(coord.variable.load())
                               for name, coord in rec.coords.items()})
 
 
-def _read_by_chunk_files(rec, path, getitem, direct_io):
+def _read_by_chunk_files(rec, path, guard, direct_io):
     """``rec`` with each lazy data variable whose stored layout :class:`ChunkFiles` covers
     read through it instead of zarr's event loop: the same dask chunks, values, attrs and
-    encoding. ``direct_io``: True, False or "auto" (see :func:`open_recording`)."""
+    encoding, and the same getter (:func:`_read_chunk`, with ``guard``). ``direct_io``:
+    True, False or "auto" (see :func:`open_recording`)."""
+    getitem = functools.partial(_read_chunk, path, guard)
     group = zarr.open_group(path, mode="r")
     readers = {}
     for name, var in rec.data_vars.items():

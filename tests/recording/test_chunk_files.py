@@ -180,7 +180,8 @@ def test_a_forked_child_reads_into_its_own_buffer(tmp_path):
     """The O_DIRECT buffer is shared memory: a child must not write into its parent's."""
     path = _network_store(tmp_path)
     files = ChunkFiles.of(str(path / "activity"), "activity",
-                          zarr.open_array(str(path / "activity"), mode="r"), direct_io=True)
+                          zarr.open_array(str(path / "activity"), mode="r"))
+    files.direct_io = True
     files.chunk(0)
     parents = chunk_files._aligned_buffer(1)
     before = bytes(parents[:4096])

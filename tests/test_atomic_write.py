@@ -103,6 +103,8 @@ ALLOWED = {
                                     "overwrite set aside before it died",
     ("recording/store.py", "_write"): "called inside save_recording's atomic_path (or on "
                                       "a URL, where object stores have no rename)",
+    ("recording/chunk_files.py", "_write_file"): "a chunk file of the store that "
+                                                  "save_recording's _write writes",
     ("tasks.py", "_discard"): "renames a damaged cache block aside to delete it",
     ("_main.py", "_make_run_in_worker"): "a run's message log, written as it goes so that "
                                          "it shows how far a failed run got; not data",

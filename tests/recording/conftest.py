@@ -1,5 +1,7 @@
 """Fixtures: small recordings shaped like the network's and like an animal's."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -53,6 +55,27 @@ def make_animal_recording(n=3000, seed=0):
                        unit={"unit": np.array(["u1", "u2", "u3", "u4"]),
                              "region": np.array(["ca1", "ca1", "adn", "adn"])},
                        position_units="cm", subject="m1", species="Mus musculus")
+
+
+def spy_chunk_files(monkeypatch, method):
+    """Record the names of the variables on which ``ChunkFiles.<method>`` ran, and the
+    flags of every file the chunk-file module opened: ``{"names": set, "flags": list}``."""
+    from hippo_probe.recording import chunk_files
+
+    seen = {"names": set(), "flags": []}
+    original, os_open = getattr(chunk_files.ChunkFiles, method), os.open
+
+    def counted(self, *args, **kwargs):
+        seen["names"].add(self.name)
+        return original(self, *args, **kwargs)
+
+    def opened(path, flags, *args, **kwargs):
+        seen["flags"].append(flags)
+        return os_open(path, flags, *args, **kwargs)
+
+    monkeypatch.setattr(chunk_files.ChunkFiles, method, counted)
+    monkeypatch.setattr(chunk_files.os, "open", opened)
+    return seen
 
 
 def assert_trial_aligned(trial, chunks):

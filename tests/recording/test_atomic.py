@@ -121,8 +121,8 @@ CONCURRENT = textwrap.dedent("""
     rec = from_arrays(np.arange(n) * 0.01, np.zeros((n, 2)),
                       activity=np.full((n, 4), value, dtype=np.float32))
     write = store._write
-    def slow_write(*args):     # both writers past the existence check before either ends
-        write(*args)
+    def slow_write(*args, **kwargs):     # both writers past the existence check before either ends
+        write(*args, **kwargs)
         time.sleep(max(0.0, start - time.time()) + value)
     store._write = slow_write
     try:

@@ -16,7 +16,7 @@ from hippo_probe.recording import chunk_files, open_recording, save_recording, s
 from hippo_probe.recording.chunk_files import ChunkFiles
 from hippo_probe.recording.config import RecordingConfig
 
-from .conftest import make_animal_recording, make_network_recording
+from .conftest import make_animal_recording, make_network_recording, spy_chunk_files
 
 SMALL = RecordingConfig(chunk_bytes=4000)       # several chunks, the last one partial
 
@@ -28,20 +28,7 @@ def _bytes(values):
 @pytest.fixture
 def chunk_reads(monkeypatch):
     """Names of the variables read through ChunkFiles, and the flags of each file opened."""
-    seen = {"names": set(), "flags": []}
-    chunk, os_open = ChunkFiles.chunk, os.open
-
-    def counted(self, i):
-        seen["names"].add(self.name)
-        return chunk(self, i)
-
-    def opened(path, flags, *args, **kwargs):
-        seen["flags"].append(flags)
-        return os_open(path, flags, *args, **kwargs)
-
-    monkeypatch.setattr(ChunkFiles, "chunk", counted)
-    monkeypatch.setattr(chunk_files.os, "open", opened)
-    return seen
+    return spy_chunk_files(monkeypatch, "chunk")
 
 
 def _network_store(tmp_path):

@@ -18,6 +18,7 @@ def test_benchmark_small_size(tmp_path):
     assert out["chunks_per_trial_aligned"]
     assert min(out[f"{phase}_MBps"] for phase in (
         "write", "direct_write", "zarr_write", "read", "direct_read", "zarr_read",
-        "raw_write", "raw_read")) > 0
+        "raw_write", "raw_read", "raw_write_first", "raw_read_first", "raw_write_last",
+        "raw_read_last")) > 0
     assert out["raw_MB"] == 50
     assert list(tmp_path.iterdir()) == []          # the store is removed afterwards

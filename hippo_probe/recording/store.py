@@ -87,9 +87,9 @@ def _encoding(rec, time_chunk, config):
 
 
 def _prepare(rec, time_chunk):
-    """Strings as variable-length strings; coords in memory; lazy data variables, and
-    numeric ones in memory with a dimension, as dask arrays chunked as they are stored
-    along time, checked block by block."""
+    """Strings as variable-length strings; coords in memory; lazy data variables (checked
+    block by block), and numeric ones in memory with a dimension, as dask arrays chunked
+    as they are stored along time."""
     rec = rec.drop_encoding()
     text = {name: var.astype(object) for name, var in rec.variables.items()
             if var.dtype.kind in "UST"}
@@ -103,10 +103,10 @@ def _prepare(rec, time_chunk):
         chunks = {dim: time_chunk if dim == "time" else -1 for dim in var.dims}
         if var.chunks is not None:
             chunked[name] = _checked(name, var.chunk(chunks))
-        elif var.ndim and var.dtype.kind in "biuf":
+        elif var.ndim and var.dtype.kind in "biuf":     # validate checked its values
             # name=False: a random name, where hashing the values would cost a pass
             data = da.from_array(var.values, chunks=tuple(chunks.values()), name=False)
-            chunked[name] = _checked(name, var.copy(data=data))
+            chunked[name] = var.copy(data=data)
     return rec.assign(chunked)
 
 

@@ -87,9 +87,8 @@ def _encoding(rec, time_chunk, config):
 
 
 def _prepare(rec, time_chunk):
-    """Strings as variable-length strings; coords in memory; lazy data variables (checked
-    block by block), and numeric ones in memory with a dimension, as dask arrays chunked
-    as they are stored along time."""
+    """Strings as variable-length strings; coords in memory; lazy data variables
+    rechunked to the zarr chunks along time and checked block by block as computed."""
     rec = rec.drop_encoding()
     text = {name: var.astype(object) for name, var in rec.variables.items()
             if var.dtype.kind in "UST"}
@@ -98,16 +97,11 @@ def _prepare(rec, time_chunk):
         rec = rec.assign({k: v for k, v in text.items() if k in rec.data_vars})
     rec = rec.assign_coords({name: coord.variable.compute()
                              for name, coord in rec.coords.items() if coord.chunks is not None})
-    chunked = {}
-    for name, var in rec.data_vars.items():
-        chunks = {dim: time_chunk if dim == "time" else -1 for dim in var.dims}
-        if var.chunks is not None:
-            chunked[name] = _checked(name, var.chunk(chunks))
-        elif var.ndim and var.dtype.kind in "biuf":     # validate checked its values
-            # name=False: a random name, where hashing the values would cost a pass
-            data = da.from_array(var.values, chunks=tuple(chunks.values()), name=False)
-            chunked[name] = var.copy(data=data)
-    return rec.assign(chunked)
+    # variables in memory stay there: xarray writes them through zarr when it writes the
+    # metadata, faster for them than a dask graph of small chunk files
+    return rec.assign({name: _checked(name, var.chunk({dim: time_chunk if dim == "time"
+                                                       else -1 for dim in var.dims}))
+                       for name, var in rec.data_vars.items() if var.chunks is not None})
 
 
 def _checked(name, var):
@@ -241,13 +235,14 @@ def save_recording(rec, path, overwrite=False, *, direct_io="auto", config=DEFAU
     (Blosc lz4 + byte shuffle) with a CRC32C checksum per chunk; string coords are
     stored as variable-length strings.
 
-    In a local store, xarray and zarr write the metadata and the coords, and the data
-    variables' chunks are computed and written one chunk file at a time
+    In a local store, xarray and zarr write the metadata, the coords and the variables in
+    memory, and the lazy (dask) data variables' chunks are computed and written one chunk
+    file at a time
     (:class:`~hippo_probe.recording.chunk_files.ChunkFiles`: the files zarr writes, byte
     for byte, without zarr's event-loop thread, behind which dask's threads would queue):
-    on two cores 1.1–1.7× as fast as ``Dataset.to_zarr`` (see the benchmarks guide). A
-    recording with a variable in another layout (a ``_FillValue`` attr, a lazy text
-    variable, ``config.checksum=False``) is written through zarr.
+    on two cores 1.0–1.9× as fast as ``Dataset.to_zarr`` (see the benchmarks guide). A
+    recording with a lazy variable in another layout (text, a ``_FillValue`` attr,
+    ``config.checksum=False``) is written through zarr.
 
     Parameters
     ----------
@@ -260,12 +255,12 @@ def save_recording(rec, path, overwrite=False, *, direct_io="auto", config=DEFAU
     overwrite : bool
         Replace an existing store at ``path``.
     direct_io : bool or "auto"
-        Write chunk files around the operating system's page cache (``O_DIRECT``, Linux;
-        elsewhere, and on file systems without it, through the cache): about a fifth of
-        the system time, and as fast or faster, but nothing of the store stays cached
-        for reading it back. ``"auto"`` (default): only when the data variables are
-        larger than the memory available (as for :func:`open_recording`), which the
-        cache could not keep anyway.
+        Write the lazy data variables' chunk files around the operating system's page
+        cache (``O_DIRECT``, Linux; elsewhere, and on file systems without it, through
+        the cache): about a fifth of the system time, and as fast or faster, but
+        nothing of them stays cached for reading back. ``"auto"`` (default): only when
+        they are larger than the memory available (as for :func:`open_recording`),
+        which the cache could not keep anyway.
     config : RecordingConfig
         Chunk size and codec.
     storage_options : dict, optional

@@ -149,6 +149,8 @@ def _write_chunks(prepared, store, pending, direct_io):
     all through zarr (``pending``, xarray's delayed write)."""
     group = zarr.open_group(store, mode="r")
     lazy = {name: var for name, var in prepared.data_vars.items() if var.chunks is not None}
+    if not lazy:                         # all in memory: written with the metadata
+        return
     writers = {}
     for name, var in lazy.items():
         array = group.get(name)

@@ -120,15 +120,16 @@ def _write(rec, store, config, storage_options=None, direct_io=False):
     """Write ``rec`` to ``store`` and mark it complete last."""
     time_chunk = storage_time_chunk(rec, config)
     prepared = _prepare(rec, time_chunk)
-    local = not _is_url(os.fspath(store))
+    # locally, the lazy variables' chunks are written below (xarray writes the rest)
+    by_chunk_files = not _is_url(os.fspath(store)) and any(
+        var.chunks is not None for var in prepared.data_vars.values())
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*does not have a Zarr V3 specification")
-        # locally, xarray writes the metadata and the coords; the chunks are written below
         pending = prepared.to_zarr(store, mode="w-", zarr_format=3, consolidated=False,
                                    write_empty_chunks=True, storage_options=storage_options,
                                    encoding=_encoding(prepared, time_chunk, config),
-                                   compute=not local)
-    if local:
+                                   compute=not by_chunk_files)
+    if by_chunk_files:
         _write_chunks(prepared, store, pending, direct_io)
     group = zarr.open_group(store, mode="r+", storage_options=storage_options)
     arrays = dict(group.arrays())
@@ -149,8 +150,6 @@ def _write_chunks(prepared, store, pending, direct_io):
     all through zarr (``pending``, xarray's delayed write)."""
     group = zarr.open_group(store, mode="r")
     lazy = {name: var for name, var in prepared.data_vars.items() if var.chunks is not None}
-    if not lazy:                         # all in memory: written with the metadata
-        return
     writers = {}
     for name, var in lazy.items():
         array = group.get(name)

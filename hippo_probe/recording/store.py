@@ -258,8 +258,8 @@ def save_recording(rec, path, overwrite=False, *, direct_io="auto", config=DEFAU
     direct_io : bool or "auto"
         Write the lazy data variables' chunk files around the operating system's page
         cache (``O_DIRECT``, Linux; elsewhere, and on file systems without it, through
-        the cache): about a fifth of the system time, and as fast or faster, but
-        nothing of them stays cached for reading back. ``"auto"`` (default): only when
+        the cache): about a fifth of the system time, 0.98–1.6× the speed in the
+        benchmarks guide's runs, but nothing of them stays cached for reading back. ``"auto"`` (default): only when
         they are larger than the memory available (as for :func:`open_recording`),
         which the cache could not keep anyway.
     config : RecordingConfig

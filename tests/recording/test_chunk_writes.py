@@ -227,3 +227,14 @@ def test_save_direct_io_must_be_a_bool_or_auto(value, tmp_path):
     with pytest.raises(ValueError, match=r"`direct_io` must be True, False or 'auto'; got"):
         save_recording(make_network_recording(), tmp_path / "r.zarr", direct_io=value)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_chunk_written_after_its_store_was_removed_makes_nothing(tmp_path):
+    """A write still running when a failed save removes its temporary store."""
+    import shutil
+
+    _, files = _writer(tmp_path)
+    shutil.rmtree(tmp_path / "a.zarr")
+    with pytest.raises(FileNotFoundError):
+        files.write_chunk(0, np.zeros((10, 3), "f4"))
+    assert list(tmp_path.iterdir()) == []

@@ -25,6 +25,8 @@ from .config import COMPLETE_MARKER, DEFAULTS
 from .layout import is_trial_aligned, trial_aligned_chunks, trial_blocks
 from .validate import check_block, validate
 
+# CF keys with which xarray changes values as it writes or reads them
+_CF_VALUE_CODING = frozenset({"scale_factor", "add_offset", "_Unsigned", "missing_value"})
 # xarray's decoders must leave the data as stored (times in seconds are not datetimes)
 _OPEN_KW = dict(consolidated=False, decode_times=False, decode_timedelta=False)
 
@@ -170,8 +172,8 @@ def _write_chunks(prepared, store, pending, direct_io):
 def _encodes_as_is(var) -> bool:
     """Whether xarray writes ``var``'s values as they are: no CF attribute or encoding
     that would scale, offset, mask or retype them."""
-    return not ({"_FillValue", "missing_value", "scale_factor", "add_offset", "_Unsigned",
-                 "dtype", "calendar"} & (var.attrs.keys() | var.encoding.keys()))
+    return not ((_CF_VALUE_CODING | {"_FillValue", "dtype", "calendar"})
+                & (var.attrs.keys() | var.encoding.keys()))
 
 
 def _stored_chunks(data, files) -> bool:
@@ -259,9 +261,9 @@ def save_recording(rec, path, overwrite=False, *, direct_io="auto", config=DEFAU
         Write the lazy data variables' chunk files around the operating system's page
         cache (``O_DIRECT``, Linux; elsewhere, and on file systems without it, through
         the cache): about a fifth of the system time, 0.98–1.6× the speed in the
-        benchmarks guide's runs, but nothing of them stays cached for reading back. ``"auto"`` (default): only when
-        they are larger than the memory available (as for :func:`open_recording`),
-        which the cache could not keep anyway.
+        benchmarks guide's runs, but nothing of them stays cached for reading back.
+        ``"auto"`` (default): only when they are larger than the memory available (as
+        for :func:`open_recording`), which the cache could not keep anyway.
     config : RecordingConfig
         Chunk size and codec.
     storage_options : dict, optional
@@ -688,8 +690,7 @@ def _decodes_as_stored(var) -> bool:
     """Whether xarray's decoding leaves ``var``'s values as stored: no scale or offset,
     and no fill value to mask but NaN in a float array (masking NaN changes nothing)."""
     encoding = var.encoding
-    if any(key in encoding for key in ("scale_factor", "add_offset", "_Unsigned",
-                                       "missing_value")):
+    if _CF_VALUE_CODING & encoding.keys():
         return False
     fill = encoding.get("_FillValue")
     return fill is None or (var.dtype.kind == "f" and bool(np.isnan(fill)))

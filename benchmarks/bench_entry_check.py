@@ -1,6 +1,6 @@
 """The analyses' entry check beside the rate maps it guards, on a lazily opened session.
 
-Every public analysis first runs :func:`hippo_probe.recording.validate.check_analysable`
+Every public analysis first runs :func:`hippo_probe.recording.check_analysable`
 (the cheap rules of ``validate``). Its cost is measured here against ``hp.ratemaps`` on
 the same lazily opened recording: 1,000,000 samples x 256 units (float32 activity, 100
 trials), saved with ``save_recording`` and opened with ``open_recording`` (dask). Target:

@@ -56,7 +56,7 @@ def warn_pooled_environments(rec, what: str) -> None:
 def check_recording(rec, variables=(), *, why="", name="rec"):
     """Check that ``rec`` is a recording (xarray Dataset) holding ``variables`` and
     following the rules every analysis relies on
-    (:func:`~hippo_probe.recording.validate.check_analysable`)."""
+    (:func:`~hippo_probe.recording.check_analysable`)."""
     if not isinstance(rec, xr.Dataset):
         raise TypeError(
             f"`{name}` must be a recording (an xarray.Dataset, schema v1); "

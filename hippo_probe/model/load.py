@@ -151,11 +151,31 @@ def load_pretrained(name: str, seed: int | None = None):
     Parameters
     ----------
     name : str or os.PathLike
-        A shipped network's name (:data:`NAMES`) or the path of a ``.pt`` file (a
+        A shipped network's name (``hippo_probe.pretrained.NAMES``: "localization",
+        "generalized", "specialized", "generalized_readout", their ``*_compass``
+        counterparts and the map-ingredient variants) or the path of a ``.pt`` file (a
         shipped-network file, a training checkpoint or a run directory).
     seed : int, optional
         The training seed of a shipped network (default: the one reported first, 0);
-        :func:`shipped_seeds` lists them.
+        :func:`hippo_probe.pretrained.shipped_seeds` lists them.
+
+    Returns
+    -------
+    Navigator
+        In eval mode, float32, with three attributes from its file: ``net.task`` (the task
+        it was trained on, e.g. "generalized"), ``net.world`` ("darkness" or "compass":
+        make its trials with ``world=net.world``) and ``net.info`` (a dict: "task",
+        "world", "config" (the training configuration), "class_weight", "test" (its
+        test-split errors), "steps_done", "finished", "base_network" and, for a readout,
+        under "readout_of" the network it reads).
+
+    Raises
+    ------
+    ModuleNotFoundError
+        torch is not installed (the ``[model]`` extra).
+    CheckpointError
+        The file is damaged, not a network, or of an architecture this version cannot
+        build; nothing in it is run.
 
     Examples
     --------

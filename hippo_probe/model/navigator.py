@@ -18,6 +18,19 @@ class Navigator(nn.Module):
     task's target frame (m), ``logits`` (T, B, n_classes) and ``h`` (T, B, H) the hidden
     state sequence (the "recorded" activity).
 
+    Attributes
+    ----------
+    config : ModelConfig
+        The architecture: sizes, variant, precision.
+    lstm : PeepholeLSTM or VariantLSTM
+        The recurrent layer.
+    position : torch.nn.Linear or PlaceCellReadout
+        The (x, y) readout.
+    classifier : torch.nn.Linear or None
+        The arena readout (tasks with arenas to name).
+    task, world, info
+        Set by :func:`~hippo_probe.load_pretrained` from the network's file (see there).
+
     Examples
     --------
     >>> import torch

@@ -15,11 +15,11 @@ from .schema import SCHEMA_VERSION, VARIABLES, annotate, attrs_for
 from .select import select_trials
 from .spikes import poisson_spikes
 from .store import open_recording, save_recording
-from .validate import validate
+from .validate import check_analysable, validate
 
 __all__ = [
     "DEFAULTS", "RecordingConfig", "SCHEMA_VERSION", "VARIABLES", "annotate", "attrs_for",
-    "bin_spikes", "from_arrays", "from_nwb", "from_pynapple", "open_recording",
+    "bin_spikes", "check_analysable", "from_arrays", "from_nwb", "from_pynapple", "open_recording",
     "poisson_spikes", "save_recording", "select_trials", "stack_trials", "to_nwb",
     "to_pynapple", "trial_aligned_chunks", "trial_blocks", "trial_layout", "validate",
 ]

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 
@@ -16,6 +18,41 @@ ESTIMATORS = {
     "TwoNN": "Facco, d'Errico, Rodriguez & Laio (2017), Sci. Rep. 7:12140",
     "MLE": "Levina & Bickel (2005), NIPS 17",
 }
+
+#: Both estimators model continuous distances: where more of the states than this share
+#: lack neighbours at a distance > 0, or have tied neighbour distances, the states are
+#: discrete (spike counts in short bins repeat exactly) and the estimate is refused (NaN).
+#: Continuous states give no ties at all (the shipped networks' 20,000: none).
+MAX_DISCRETE_SHARE = 0.05
+
+
+def _import_skdim():
+    """scikit-dimension, imported without its side effect: one of its modules
+    (``skdim.id._FisherS``, 0.3) calls ``warnings.filterwarnings("ignore")`` when
+    imported, which would silence every later warning of the process, ours included."""
+    with warnings.catch_warnings():       # restores the filters as they were
+        import skdim
+    return skdim
+
+
+def _discrete_reasons(names, n_points, dist, kept, k):
+    """Why each estimator in ``names`` cannot be trusted on these states ("" if it can):
+    states without ``k`` neighbours at a distance > 0 (repeated states), or tied
+    neighbour distances among those it reads (TwoNN the first two, MLE the first k)."""
+    hint = ("the states repeat exactly or lie on a lattice (discrete activity, e.g. spike "
+            "counts: estimate on smoothed rates or coarser bins)")
+    skipped = 1 - kept.sum() / n_points
+    if skipped > MAX_DISCRETE_SHARE:
+        why = (f"{n_points - kept.sum()} of {n_points} states lack {k} neighbours at a "
+               f"distance > 0 outside the Theiler window: {hint}")
+        return [why] * len(names)
+    reasons = []
+    for name in names:
+        read = dist[:, :2] if name == "TwoNN" else dist
+        tied = float((np.diff(read, axis=1) == 0).any(axis=1).mean()) if len(read) else 0.0
+        reasons.append(f"{tied:.0%} of the states have tied neighbour distances, which "
+                       f"{name} cannot use: {hint}" if tied > MAX_DISCRETE_SHARE else "")
+    return reasons
 
 
 def _neighbours(points, order, trial, k, theiler):
@@ -81,11 +118,19 @@ def intrinsic_dimension(rec_or_array, *, estimators=None, n_neighbors=None,
         As for :func:`correlation_dimension` (defaults 4000, 10, 0.1 for recordings and
         0 for arrays, 0).
 
+    Both estimators assume continuous distances. Where more than 5% of the states lack
+    ``k`` neighbours at a distance > 0 (states that repeat exactly, as spike counts in
+    short bins do), or have tied distances among the neighbours an estimator reads, its
+    dimension is NaN with the reason in ``attrs["nan_reasons"]`` and an
+    :class:`~hippo_probe.AnalysisWarning`: on such states TwoNN reads ~0 and MLE far more
+    than the number of units.
+
     Returns
     -------
     xarray.Dataset
         ``dimension`` over ``estimator``; attrs ``n_points``, ``n_skipped`` (points with
-        fewer than ``k`` neighbours outside the Theiler window) and the parameters.
+        fewer than ``k`` neighbours at a distance > 0 outside the Theiler window),
+        ``nan_reasons`` where an estimate is refused, and the parameters.
 
     References
     ----------
@@ -104,7 +149,7 @@ def intrinsic_dimension(rec_or_array, *, estimators=None, n_neighbors=None,
     True
     """
     try:
-        import skdim
+        skdim = _import_skdim()
     except ModuleNotFoundError:
         from .._optional import missing
         raise missing("skdim", "intrinsic_dimension") from None
@@ -127,15 +172,19 @@ def intrinsic_dimension(rec_or_array, *, estimators=None, n_neighbors=None,
         raise ValueError(f"intrinsic dimension needs more than {k + 2 * theiler + 1} "
                          f"samples (n_neighbors + the Theiler window); got {len(points)}")
     dist, idx, kept = _neighbours(points, order, trial, k, theiler)
+    reasons = _discrete_reasons(names, len(points), dist, kept, k)
     values = []
-    for name in names:
-        if name == "TwoNN":
+    for name, why in zip(names, reasons):
+        if why:
+            values.append(np.nan)
+        elif name == "TwoNN":
             est = skdim.id.TwoNN(discard_fraction=CFG.twonn_discard, dist=True)
             est.fit(dist[:, :2])
         else:
             est = skdim.id.MLE()
             est.fit(points[kept], precomputed_knn_arrays=(dist, idx))
-        values.append(float(est.dimension_))
+        if not why:
+            values.append(float(est.dimension_))
     out = xr.Dataset(
         {"dimension": ("estimator", values, {"units": "1",
                                              "long_name": "intrinsic dimension"})},
@@ -145,4 +194,5 @@ def intrinsic_dimension(rec_or_array, *, estimators=None, n_neighbors=None,
         references=[ESTIMATORS[n] for n in names], n_neighbors=k, theiler=theiler,
         max_points=max_points, seed=seed, n_points=len(points), n_skipped=int((~kept).sum()),
         skdim=skdim.__version__, **info)
+    out.attrs = _common.report_nan(out.attrs, names, reasons, "intrinsic dimension")
     return out

@@ -58,3 +58,72 @@ def test_bad_input_is_named():
         hp.intrinsic_dimension(x[:20])
     with pytest.raises(ValueError, match="NaN"):
         hp.intrinsic_dimension(np.full((100, 5), np.nan))
+
+
+def _spike_counts(n=20000, units=15, seed=0):
+    """Poisson counts in 20 ms bins of units tuned to a slow 2-D trajectory: mostly
+    zeros, so many states repeat exactly and neighbour distances tie."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 0.02
+    xy = np.c_[np.cos(t / 7), np.sin(t / 5)]
+    centres = rng.uniform(-1, 1, (units, 2))
+    rate = 5 * np.exp(-((xy[:, None] - centres) ** 2).sum(-1) / 0.1)
+    return rng.poisson(rate * 0.02).astype(float)
+
+
+def test_discrete_states_are_refused_with_the_reason():
+    """On spike counts both estimators break (TwoNN reads ~0, MLE far above the number
+    of units): NaN, the reason in attrs and a warning, instead of a plausible number."""
+    counts = _spike_counts()
+    with pytest.warns(hp.AnalysisWarning, match="intrinsic dimension is NaN"):
+        res = hp.intrinsic_dimension(counts)
+    assert np.isnan(res.dimension.values).all()
+    assert set(res.attrs["nan_reasons"]) == {"TwoNN", "MLE"}
+    assert "spike counts" in res.attrs["nan_reasons"]["MLE"]
+    assert res.attrs["n_skipped"] > 0.05 * res.attrs["n_points"]
+
+
+def test_tied_distances_refuse_the_estimate_though_no_state_repeats():
+    """Points on an integer lattice, every point distinct (none is skipped) but their
+    neighbour distances tie: refused by the tie rule; jittered, they are estimated."""
+    rng = np.random.default_rng(0)
+    lattice = np.unique(rng.integers(0, 40, size=(6000, 3)), axis=0)[:4000]
+    lattice = lattice[rng.permutation(len(lattice))].astype(float)
+    with pytest.warns(hp.AnalysisWarning, match="tied neighbour distances"):
+        res = hp.intrinsic_dimension(lattice @ np.eye(3, 10))
+    assert res.attrs["n_skipped"] == 0
+    assert np.isnan(res.dimension.values).all()
+    jittered = (lattice + rng.normal(scale=1e-3, size=lattice.shape)) @ np.eye(3, 10)
+    res = hp.intrinsic_dimension(jittered)
+    assert "nan_reasons" not in res.attrs and np.isfinite(res.dimension).all()
+    assert float(res.dimension.sel(estimator="MLE")) == pytest.approx(3, rel=0.15)
+
+
+def test_continuous_states_keep_their_estimate_and_warn_nothing():
+    x = np.random.default_rng(2).uniform(size=(2000, 2)) @ np.eye(2, 12)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", hp.AnalysisWarning)
+        res = hp.intrinsic_dimension(x)
+    assert "nan_reasons" not in res.attrs
+    np.testing.assert_allclose(res.dimension, 2, rtol=0.15)
+
+
+def test_importing_scikit_dimension_leaves_the_warning_filters_alone():
+    """scikit-dimension silences every warning of the process when imported; the first
+    call in a fresh process must leave the filters as they were, so later warnings show."""
+    import subprocess
+    import sys
+    code = (
+        "import sys, warnings, numpy as np, hippo_probe as hp\n"
+        "assert 'skdim' not in sys.modules\n"
+        "hp.intrinsic_dimension(np.random.default_rng(0).normal(size=(300, 3)))\n"
+        "assert 'skdim' in sys.modules\n"
+        "blanket = [f for f in warnings.filters if f[0] == 'ignore' and f[1] is None\n"
+        "           and f[2] is Warning]\n"
+        "assert not blanket, blanket\n"
+        "with warnings.catch_warnings(record=True) as w:\n"
+        "    warnings.warn('still heard', hp.AnalysisWarning)\n"
+        "assert len(w) == 1\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr

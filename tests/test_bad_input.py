@@ -490,6 +490,66 @@ def test_every_analysis_refuses_a_damaged_session(analysis, kind):
             ANALYSES[analysis](bad)
 
 
+def _spike_counts(r, edit):
+    """``r`` as a spike-count session (Poisson counts), its counts then edited."""
+    counts = np.random.default_rng(4).poisson(0.5, r.activity.shape).astype(float)
+    edit(counts)
+    return r.assign(activity=(r.activity.dims, counts, r.activity.attrs)).assign_attrs(
+        activity_kind="spike_count")
+
+
+COUNT_DAMAGE = {
+    "counts shifted by a half": lambda c: c.__iadd__(0.5),
+    "one negative count": lambda c: c.__setitem__((500, 2), -3.0),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(COUNT_DAMAGE))
+@pytest.mark.parametrize("analysis", sorted(set(ANALYSES) - {"poisson_spikes"}))
+def test_every_analysis_refuses_spike_counts_that_are_not_counts(analysis, kind):
+    """Counts edited after the session was built (validate refuses them) are refused by
+    every analysis's entry check too, instead of being mapped into plausible rates."""
+    bad = _spike_counts(_session(), COUNT_DAMAGE[kind])
+    index = "(0, 0)" if kind.startswith("counts") else "(500, 2)"
+    with pytest.raises(RecordingError, match=r"whole numbers >= 0; got .* at index "
+                                             + re.escape(index)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ANALYSES[analysis](bad)
+
+
+def test_valid_spike_counts_pass_the_entry_check():
+    good = _spike_counts(_session(), lambda c: None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        hp.ratemaps(good, bin_size=0.1)
+        hp.spatial_information(good, bin_size=0.1)
+
+
+def test_the_count_rule_finds_the_first_bad_entry_past_the_first_slice():
+    from hippo_probe.recording.validate import check_block
+    counts = np.zeros((300_000, 8))              # 2.4 million entries: several slices
+    counts[250_001, 5] = 1.25
+    counts[270_000, 0] = -1
+    with pytest.raises(RecordingError, match=r"got 1\.25 at index \(250001, 5\)"):
+        check_block("activity", counts, kind="spike_count")
+    with pytest.raises(RecordingError, match=r"got -1 at index \(270000, 0\)"):
+        check_block("activity", counts.astype(np.int64), kind="spike_count")
+    # the block's origin in the recording shifts the index named
+    with pytest.raises(RecordingError, match=r"at index \(250101, 5\)"):
+        check_block("activity", counts, origin=(100, 0), kind="spike_count")
+    assert check_block("activity", counts, kind="rate") is counts
+
+
+def test_a_lazy_session_of_fractional_counts_is_not_saved(tmp_path):
+    good = _spike_counts(_session(), lambda c: None)
+    lazy = good.activity.chunk({"time": 120})
+    bad = good.assign(activity=lazy.copy(data=lazy.data.astype(np.float32) + 0.5))
+    with pytest.raises(RecordingError, match="whole numbers >= 0"):
+        save_recording(bad, tmp_path / "r.zarr")
+    assert not list(tmp_path.iterdir())
+
+
 def test_an_unknown_activity_kind_is_warned_about():
     with pytest.warns(UserWarning, match="activity_kind 'spikes', which the analyses do not "
                                          "know"):

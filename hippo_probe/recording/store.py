@@ -101,19 +101,21 @@ def _prepare(rec, time_chunk):
                              for name, coord in rec.coords.items() if coord.chunks is not None})
     # variables in memory stay there: xarray writes them through zarr when it writes the
     # metadata, faster for them than a dask graph of small chunk files
+    kind = rec.attrs.get("activity_kind")
     return rec.assign({name: _checked(name, var.chunk({dim: time_chunk if dim == "time"
-                                                       else -1 for dim in var.dims}))
+                                                       else -1 for dim in var.dims}), kind)
                        for name, var in rec.data_vars.items() if var.chunks is not None})
 
 
-def _checked(name, var):
+def _checked(name, var, kind):
     """``var`` (dask-backed) with each block checked against the schema as it is computed
-    for writing, so lazily made NaNs fail the save (and nothing is left on disk) instead
-    of reaching the store unchecked."""
+    for writing (``kind``: the recording's ``activity_kind``), so lazily made NaNs, or
+    spike counts that are not whole numbers, fail the save (and nothing is left on disk)
+    instead of reaching the store unchecked."""
 
     def check(block, block_info=None):
         origin = [lo for lo, _ in block_info[0]["array-location"]] if block_info else None
-        return check_block(name, block, origin)
+        return check_block(name, block, origin, kind)
 
     return var.copy(data=da.map_blocks(check, var.data, dtype=var.dtype))
 

@@ -264,31 +264,22 @@ def _check_environments(rec):
 def _check_values(rec, check_data):
     if rec.sizes.get("unit", 0) == 0:
         _fail("activity", "must have at least one unit; got 0 units")
-    counts = rec["activity"]
-    if rec.attrs["activity_kind"] == "spike_count" and (
-            check_data or (check_data is None and counts.chunks is None)):
-        values = np.asarray(counts.values)
-        bad = (values < 0) | (values != np.round(values))
-        if bad.any():
-            idx = tuple(int(i) for i in np.argwhere(bad)[0])
-            _fail("activity", f"holds spike counts (activity_kind 'spike_count'): they "
-                              f"must be whole numbers >= 0; got {_v(values[idx])} at index "
-                              f"{idx}")
     for name in _FINITE_CHECKS:
         if name not in rec.data_vars:
             continue
         var = rec[name]
         if check_data is False or (check_data is None and var.chunks is not None):
             continue
-        check_block(name, np.asarray(var.values))
+        check_block(name, np.asarray(var.values), kind=rec.attrs["activity_kind"])
 
 
-def check_block(name, values, origin=None):
+def check_block(name, values, origin=None, kind=None):
     """Check the values of (a block of) the data variable ``name`` against the schema.
 
     ``origin`` is the block's first index in the whole variable, so that the error names
     the index in the recording (used when a lazy recording is checked block by block as
-    it is written). Returns ``values`` unchanged.
+    it is written). ``kind`` is the recording's ``activity_kind``: spike counts
+    (``"spike_count"``) must also be whole numbers >= 0. Returns ``values`` unchanged.
     """
     allow_nan = _FINITE_CHECKS.get(name)
     if allow_nan is None:
@@ -318,7 +309,30 @@ def check_block(name, values, origin=None):
         if out.any():
             idx = where(out)
             _fail(name, f"must be in [0, 1]; got {value_at(idx)} at index {idx}")
+    if name == "activity" and kind == "spike_count":
+        bad = _first_non_count(values)
+        if bad is not None:
+            idx = tuple(i + o for i, o in zip(bad, origin))
+            _fail(name, f"holds spike counts (activity_kind 'spike_count'): they must be "
+                        f"whole numbers >= 0; got {value_at(idx)} at index {idx}")
     return values
+
+
+def _first_non_count(values):
+    """Index of the first entry of ``values`` that is not a whole number >= 0, or None;
+    rows a slice at a time, so that no temporary is the size of ``values``."""
+    if values.ndim == 0:
+        values = values.reshape(1)
+    rows = max(1, (1 << 20) // max(1, values[:1].size))
+    for lo in range(0, len(values), rows):
+        part = values[lo:lo + rows]
+        bad = part < 0
+        if part.dtype.kind == "f":
+            bad |= part != np.trunc(part)
+        if bad.any():
+            first = np.argwhere(bad)[0]
+            return (int(first[0]) + lo, *(int(i) for i in first[1:]))
+    return None
 
 
 #: How far the median sample interval within trials may be from ``dt`` (a fraction of
@@ -360,7 +374,8 @@ def check_analysable(rec, *, name="rec"):
     - ``position``, ``head_direction``: real numbers, no inf (NaN is lost tracking);
       ``head_direction`` in radians, [-pi, pi);
     - ``activity``: real numbers (not complex, text or bool), at least one unit, finite
-      where in memory;
+      where in memory, and there whole numbers >= 0 if ``activity_kind`` is
+      ``"spike_count"``;
     - ``environment``: integer ids, one value per trial;
     - ``position``: dims ``('time', 'space')``.
 
@@ -455,7 +470,8 @@ def check_analysable(rec, *, name="rec"):
                 da = loaded[var] = da.compute()
             check_block(var, np.asarray(da.values))
     if "activity" in rec.variables and rec["activity"].chunks is None:
-        check_block("activity", np.asarray(rec["activity"].values))
+        check_block("activity", np.asarray(rec["activity"].values),
+                    kind=attrs.get("activity_kind"))
     if "environment" in rec.coords and rec["environment"].dtype.kind not in "iu":
         _fail("environment", f"(of `{name}`) must hold integer ids (schema v1); got dtype "
                              f"{rec['environment'].dtype} (text labels: number them, e.g. "

@@ -710,9 +710,10 @@ def to_nwb(rec, path, overwrite=False):
     other per-sample variables become TimeSeries there too, and the variables NWB has no
     type for (``readout_weight``, ``arena_vertices``, ``environment_id``, …) go to the
     file's ``scratch`` space, each with its dims and attrs as JSON; the dataset attrs are
-    kept as JSON in the file's ``notes``. ``from_nwb(path, epoch=None)`` reads it all
-    back. The file is written beside ``path`` and renamed into place, so a crash leaves
-    no half file.
+    kept as JSON in the file's ``notes``. One epoch spans the recording, tagged with its
+    ``epoch`` attr (the epoch it was imported from) or else ``"wake"``, so that
+    ``from_nwb(path)`` reads it all back with its defaults. The file is written beside
+    ``path`` and renamed into place, so a crash leaves no half file.
 
     Parameters
     ----------
@@ -726,7 +727,7 @@ def to_nwb(rec, path, overwrite=False):
     Examples
     --------
     >>> to_nwb(rec, "session.nwb")                      # doctest: +SKIP
-    >>> back = from_nwb("session.nwb", epoch=None)       # doctest: +SKIP
+    >>> back = from_nwb("session.nwb")                   # doctest: +SKIP
     """
     overwrite = check_bool("overwrite", overwrite)
     pynwb, Position, CompassDirection, SpatialSeries = _nwb_classes()
@@ -768,6 +769,11 @@ def to_nwb(rec, path, overwrite=False):
                       environment=int(trial_env[k]), id=int(tid))
         support.add_interval(start_time=float(t_start[k]), stop_time=float(t_stop[k]))
     nwb.add_time_intervals(support)
+    # one epoch over the whole recording, tagged with the epoch it was imported from, else
+    # "wake" (a network's trials are active navigation): from_nwb's default reads it back
+    nwb.add_epoch(start_time=float(min(t_start.min(), time[0])),
+                  stop_time=float(max(t_stop.max(), time[-1])),
+                  tags=[str(attrs.get("epoch") or "wake")])
 
     module = nwb.create_processing_module(MODULE, "hippo_probe recording variables")
     activity = rec["activity"]

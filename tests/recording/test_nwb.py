@@ -101,15 +101,18 @@ def test_wake_validates_and_round_trips_through_zarr(wake, tmp_path):
     xr.testing.assert_identical(back.load(), wake)
 
 
-def test_wake_round_trips_through_nwb(wake, tmp_path):
+@pytest.mark.parametrize("epoch", ["wake", None], ids=["default epoch", "every epoch"])
+def test_wake_round_trips_through_nwb(wake, tmp_path, epoch):
     to_nwb(wake, tmp_path / "wake.nwb")
-    back = from_nwb(tmp_path / "wake.nwb", epoch=None)
+    back = from_nwb(tmp_path / "wake.nwb", epoch=epoch)
     xr.testing.assert_identical(back, wake)
 
 
-def test_network_recording_round_trips_through_nwb(network_recording, tmp_path):
+@pytest.mark.parametrize("read", [lambda p: from_nwb(p), lambda p: from_nwb(p, epoch=None)],
+                         ids=["defaults", "every epoch"])
+def test_network_recording_round_trips_through_nwb(network_recording, tmp_path, read):
     to_nwb(network_recording, tmp_path / "net.nwb")
-    back = from_nwb(tmp_path / "net.nwb", epoch=None)
+    back = read(tmp_path / "net.nwb")
     for name in ("position", "head_direction", "activity", "trial", "trial_start",
                  "trial_stop", "trial_environment", "environment"):
         assert back[name].dtype == network_recording[name].dtype

@@ -22,6 +22,11 @@ mouse = hp.from_nwb(MOUSE_NWB, position_units="m")
 # autocorrelogram, which a single field or a maze's arm does not have, and the
 # position x direction model of the conjunctive score may stop before converging on a
 # short session. They are recorded in the result's attrs; here they are silenced.
+# One warning matters for reading the classes: this mouse ran on a Y-maze, not in an
+# open field. Without ``walls=`` the border score takes the arena's walls to be the
+# convex hull of the visited bins, which the maze fills only 28% of, so its walls cross
+# space the mouse never entered; the border and grid classes of this session are not the
+# open-field classes those scores were defined for (``classify_cells`` warns so).
 with warnings.catch_warnings():
     warnings.simplefilter("ignore", hp.AnalysisWarning)
     cells = hp.classify_cells(mouse, n_shuffles=20, bin_size=0.04, seed=0)

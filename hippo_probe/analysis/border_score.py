@@ -269,11 +269,12 @@ def resolve_walls(walls, maps, lead, x, y, size, *, search_width, merge_angle,
               min_wall_bins=min_wall_bins)
     known = maps.attrs.get("arena_vertices")
     env_ids = maps.attrs.get("arena_environment")
-    out = []
+    out, coverage = [], []
     for g in range(n_groups):
         visited = occ_g[g] > 0
+        estimated = False
         if (isinstance(walls, str) and walls == "occupancy") or (walls is None and known is None):
-            verts = estimate_arena(occ_g[g], x, y, size)
+            verts, estimated = estimate_arena(occ_g[g], x, y, size), True
             source = "estimated from occupancy (convex hull of the visited bins)"
         elif walls is not None:
             verts = check_finite("walls", check_shape(
@@ -296,9 +297,27 @@ def resolve_walls(walls, maps, lead, x, y, size, *, search_width, merge_angle,
             else:
                 verts, source = estimate_arena(occ_g[g], x, y, size), (
                     "estimated from occupancy: the maps pool several arenas")
+                estimated = True
         verts = verts[np.isfinite(verts).all(1)]
         out.append(arena_walls(verts, x, y, size, visited, source=source, **kw))
+        if estimated:
+            coverage.append(hull_coverage(verts, x, y, visited))
+    if coverage and min(coverage) < BORDER.min_hull_coverage:
+        _common.warn(
+            f"the visited bins fill only {min(coverage):.0%} of their convex hull, from "
+            f"which the walls were estimated: a maze or track rather than an open field, "
+            f"whose hull edges cross space the animal never entered. Border (and grid) "
+            f"scores assume an open arena; pass `walls=` with the arena's outline, or "
+            f"read them with care")
     return out
+
+
+def hull_coverage(vertices, x, y, visited) -> float:
+    """The fraction of the bins whose centres lie inside the polygon ``vertices`` that
+    were visited."""
+    gx, gy = np.meshgrid(x, y)
+    inside = inside_polygon(np.c_[gx.ravel(), gy.ravel()], np.asarray(vertices, float))
+    return float(np.asarray(visited, bool).ravel()[inside].mean()) if inside.any() else 1.0
 
 
 @fill_doc

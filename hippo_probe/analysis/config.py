@@ -414,6 +414,12 @@ class BorderConfig:
         by any field in the corner); it still bounds the arena for distances.
     sigma : float
         Gaussian smoothing of the maps (bins) when made here.
+    min_hull_coverage : float
+        Walls estimated from the occupancy (the convex hull of the visited bins) are
+        warned about when the visited bins fill less than half of that hull: the session
+        was on a maze or track (the shipped mouse's Y-maze: 28%), whose hull's edges cross
+        space the animal never entered, not an open field's walls (a foraging session
+        fills most of it).
     """
 
     threshold: float = 0.3
@@ -423,6 +429,7 @@ class BorderConfig:
     merge_angle: float = 30.0
     min_wall_bins: int = 4
     sigma: float = 1.0
+    min_hull_coverage: float = 0.5
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,9 @@
 """Border score in polygon arenas: border cells along one wall, place and random units,
 walls estimated from occupancy, and agreement with opexebo on square arenas."""
 
+import warnings
+from pathlib import Path
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -144,3 +147,58 @@ def test_a_map_without_data_is_nan_and_one_without_a_field_is_minus_one():
     walls = rec["arena_vertices"].values[0]
     score = hp.border_score(maps, walls=walls).border_score.values
     assert np.isnan(score[1]) and score[2] == -1.0 and np.isfinite(score[0])
+
+
+def _walk(inside, n=60_000, seed=0):
+    """A random walk at about 0.2 m/s in 20 ms steps kept to the region ``inside``."""
+    rng = np.random.default_rng(seed)
+    xy = np.zeros((n, 2))
+    p = np.array([0.0, 0.0])
+    for i in range(n):
+        q = p + rng.normal(0, 0.004, 2)
+        p = q if inside(q) else p
+        xy[i] = p
+    return xy
+
+
+def _session_in(inside):
+    xy = _walk(inside)
+    t = np.arange(len(xy)) * 0.02
+    act = np.exp(-((xy - 0.2) ** 2).sum(1) / 0.02)[:, None]
+    return hp.recording.from_arrays(t, xy, activity=act, activity_kind="rate")
+
+
+def _hull_warnings(rec, **kw):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hp.border_score(rec, n_shuffles=0, **kw)
+    return [str(w.message) for w in caught if "convex hull" in str(w.message)]
+
+
+def test_walls_estimated_around_a_maze_are_warned_about():
+    """A Y-shaped track fills a small part of its hull; the open square fills most."""
+    def y_maze(q):
+        arms = [np.array([np.cos(a), np.sin(a)]) for a in (np.pi / 2, 7 * np.pi / 6,
+                                                           11 * np.pi / 6)]
+        return any(0 <= q @ u <= 0.6 and abs(q @ np.array([-u[1], u[0]])) <= 0.04
+                   for u in arms)
+
+    def square(q):
+        return bool(np.all(np.abs(q) <= 0.5))
+
+    said = _hull_warnings(_session_in(y_maze), bin_size=0.05)
+    assert len(said) == 1 and "maze or track" in said[0]
+    fill = float(said[0].split("fill only ")[1].split("%")[0])
+    assert fill < 50
+    assert not _hull_warnings(_session_in(square), bin_size=0.05)
+    # walls given: nothing estimated, nothing to warn about
+    assert not _hull_warnings(_session_in(y_maze), bin_size=0.05,
+                              walls=[[-0.6, -0.4], [0.6, -0.4], [0.0, 0.65]])
+
+
+def test_the_shipped_y_maze_session_is_warned_about():
+    pytest.importorskip("pynwb")
+    mouse = hp.from_nwb(Path(__file__).parents[1] / "data" / "A2929-200711.nwb",
+                        epoch="wake", position_units="m")
+    said = _hull_warnings(mouse)
+    assert len(said) == 1 and "28%" in said[0]

@@ -41,7 +41,7 @@ def test_the_readme_jupyter_example_on_the_mouse_session_runs_without_torch():
         import matplotlib
         matplotlib.use("Agg")
         import hippo_probe as hp
-        mouse = hp.from_nwb("tests/data/A2929-200711.nwb", epoch="wake")
+        mouse = hp.from_nwb("tests/data/A2929-200711.nwb", epoch="wake", position_units="m")
         maps = hp.ratemaps(mouse)
         maps.hp.plot()
         hd = hp.head_direction_tuning(mouse, n_bins=60)

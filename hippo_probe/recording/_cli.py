@@ -19,6 +19,10 @@ def add_commands(sub):
                    help="factor on the file's compass angle that makes head direction "
                         "counter-clockwise from the first floor axis toward the second: 1 "
                         "keeps it, -1 negates it, auto reads it from the axes' handedness")
+    p.add_argument("--position-units", default=None, choices=["m", "cm", "mm"],
+                   type=one_of("position_units", ("m", "cm", "mm")),
+                   help="length unit of the file's positions, where the file does not say "
+                        "(default: the file's own; metres, with a warning, if it has none)")
     p.add_argument("--no-trials", action="store_true",
                    help="ignore the file's trials table (one trial per epoch)")
     p.add_argument("--overwrite", action="store_true", help="replace DEST if it exists")
@@ -34,7 +38,7 @@ def _import_nwb(args):
         args.head_direction_sign)
     rec = from_nwb(args.nwb, epoch=None if args.epoch == "all" else args.epoch,
                    trials=False if args.no_trials else "auto", floor_axes=args.floor_axes,
-                   head_direction_sign=sign)
+                   head_direction_sign=sign, position_units=args.position_units)
     save_recording(rec, args.dest, overwrite=args.overwrite)
     print(f"saved {args.dest}: {rec.sizes['time']} samples x {rec.sizes['unit']} units, "
           f"{rec.sizes['trial_id']} trial(s), {float(rec.activity.sum()):.0f} "

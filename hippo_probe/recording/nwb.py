@@ -233,9 +233,11 @@ def _read_position(nwb, name, floor_axes, position_units, path):
         if declared not in ("", "unknown", "none", "n/a", "a.u."):
             raise RecordingError(f"position unit {first.unit!r} in {path} is not a length "
                                  f"this reader knows ({sorted(NWB_LENGTH_UNITS)}); pass "
-                                 f"`position_units` ('m', 'cm' or 'mm') if you know it")
+                                 f"`position_units` ('m', 'cm' or 'mm'; `--position-units` "
+                                 f"of `hippo-probe import-nwb`) if you know it")
         warnings.warn(f"the position in {path} has no unit ({first.unit!r}): taken as "
-                      f"metres; pass `position_units` if it is not", UserWarning,
+                      f"metres; pass `position_units` (`--position-units` of "
+                      f"`hippo-probe import-nwb`) if it is not", UserWarning,
                       stacklevel=4)
         unit = "m"
     xy = np.column_stack([columns[a] for a in floor_axes]) * LENGTH_UNITS[

@@ -1,6 +1,7 @@
 """NWB import/export on a real mouse session (tests/data/A2929-200711.README.md)."""
 
 import datetime
+import warnings
 
 import numpy as np
 import pynwb
@@ -199,6 +200,23 @@ def test_cli_import(tmp_path, capsys):
     assert open_recording(dest).sizes["unit"] == 15
     assert cli(["import-nwb", str(NWB_PATH), str(dest)]) == 2
     assert "already exists" in capsys.readouterr().err
+
+
+def test_cli_import_takes_the_position_units(tmp_path, capsys):
+    """The shipped file's positions have no unit: metres with a warning that names the
+    option, or the unit given, without one."""
+    with pytest.warns(UserWarning, match="--position-units"):
+        assert cli(["import-nwb", str(NWB_PATH), str(tmp_path / "m.zarr")]) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UserWarning)
+        assert cli(["import-nwb", str(NWB_PATH), str(tmp_path / "cm.zarr"),
+                    "--position-units", "cm"]) == 0
+    metres = open_recording(tmp_path / "m.zarr").position.values
+    np.testing.assert_allclose(open_recording(tmp_path / "cm.zarr").position.values,
+                               metres * 0.01, rtol=1e-6)
+    assert cli(["import-nwb", str(NWB_PATH), str(tmp_path / "x.zarr"),
+                "--position-units", "inch"]) == 2
+    assert "position_units" in capsys.readouterr().err
 
 
 def _damaged_copy(tmp_path, damage):

@@ -141,6 +141,20 @@ def _pick_group(da, keep, group):
     return (da.isel({d: 0 for d in rest}) if rest else da), dim, label
 
 
+def _group_caption(da, keep, group) -> str:
+    """The title's note of the group :func:`_pick_group` shows, and how many there are
+    (a grid shows one environment or trial of several)."""
+    extra = [d for d in da.dims if d not in keep]
+    if not extra:
+        return ""
+    labels = list(da[extra[0]].values)
+    label = labels[0] if group is None else group
+    caption = f" \N{EM DASH} {extra[0]} {label}"
+    if len(labels) > 1 and label in labels:
+        caption += f" ({labels.index(label) + 1} of {len(labels)}; `group=` shows another)"
+    return caption
+
+
 def _units(da, units, limit):
     if units is not None:
         da = da.sel(unit=list(units))
@@ -249,6 +263,7 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
     from ._validators import check_option
 
     check_option("scale", scale, ("unit", "shared"))
+    caption = _group_caption(maps, ("unit", "y", "x"), group)
     maps, group_dim, label = _pick_group(maps, ("unit", "y", "x"), group)
     maps = _units(maps, units, 64).transpose("unit", "y", "x")
     fig, axes = _panels(maps.sizes["unit"], max_cols=max_cols, panel=panel, fig=fig,
@@ -290,10 +305,7 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
         # minimum) to each panel's peak, written in the panel's title
         _colorbar(fig, used, ScalarMappable(Normalize(0, 1), colours), _label(maps),
                   ticks=[0, 1], ticklabels=[floor, "peak"])
-    title = _label(maps, "rate")
-    if group_dim is not None:
-        title += f" \N{EM DASH} {group_dim} {label}"
-    fig.suptitle(title, fontsize=9)
+    fig.suptitle(_label(maps, "rate") + caption, fontsize=9)
     return fig
 
 
@@ -315,7 +327,8 @@ def autocorrelation_grid(acorr, *, units=None, group=None, max_cols=8, cmap="RdB
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
 
-    acorr, group_dim, label = _pick_group(acorr, ("unit", "lag_y", "lag_x"), group)
+    caption = _group_caption(acorr, ("unit", "lag_y", "lag_x"), group)
+    acorr, _, _ = _pick_group(acorr, ("unit", "lag_y", "lag_x"), group)
     acorr = _units(acorr, units, 64).transpose("unit", "lag_y", "lag_x")
     seen = np.isfinite(acorr.values).any(0)
     if seen.any():  # crop to the lags defined somewhere (an odd-shaped arena leaves few)
@@ -330,10 +343,8 @@ def autocorrelation_grid(acorr, *, units=None, group=None, max_cols=8, cmap="RdB
                          titles=[_unit_name(acorr, u) for u in acorr["unit"].values])
     _colorbar(fig, axes[:n], ScalarMappable(norm, colours), _label(acorr),
               ticks=[-1, 0, 1])
-    title = f"spatial {acorr.attrs.get('long_name', 'autocorrelation')}"
-    if group_dim is not None:
-        title += f" \N{EM DASH} {group_dim} {label}"
-    fig.suptitle(title, fontsize=9)
+    fig.suptitle(f"spatial {acorr.attrs.get('long_name', 'autocorrelation')}" + caption,
+                 fontsize=9)
     return fig
 
 
@@ -371,6 +382,7 @@ def hd_polar(tuning, *, units=None, group=None, max_cols=6, panel=1.8, fig=None,
     stats = tuning if isinstance(tuning, xr.Dataset) and "mean_vector_length" in tuning \
         else None
     curves = tuning["tuning_curve"] if isinstance(tuning, xr.Dataset) else tuning
+    caption = _group_caption(curves, ("unit", "direction"), group)
     curves, group_dim, label = _pick_group(curves, ("unit", "direction"), group)
     curves = _units(curves, units, 48).transpose("unit", "direction")
     offset = None
@@ -413,9 +425,7 @@ def hd_polar(tuning, *, units=None, group=None, max_cols=6, panel=1.8, fig=None,
     for ax in axes[n:]:
         ax.axis("off")
     title = (f"{_label(curves)} vs {curves['direction'].attrs.get('long_name', 'direction')}"
-             f" (\N{DEGREE SIGN})")
-    if group_dim is not None:
-        title += f" \N{EM DASH} {group_dim} {label}"
+             f" (\N{DEGREE SIGN})") + caption
     if stats is not None:
         title += "\nR: mean vector length; pref: preferred direction"
     if offset is not None:

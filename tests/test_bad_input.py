@@ -550,6 +550,17 @@ def test_a_lazy_session_of_fractional_counts_is_not_saved(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("kw, words", [
+    (dict(min_speed=100), "`min_speed` = 100 m/s leaves no sample to map: 720 of 720 are "
+                          "slower"),
+    (dict(extent=(2, 3, 2, 3)), "`extent` = (2, 3, 2, 3) leaves no sample to map: 720 of "
+                                "720 positions lie outside it"),
+])
+def test_an_argument_that_leaves_nothing_to_map_is_named(kw, words):
+    with pytest.raises(ValueError, match=re.escape(words)):
+        hp.ratemaps(_session(), bin_size=0.1, **kw)
+
+
 def test_an_unknown_activity_kind_is_warned_about():
     with pytest.warns(UserWarning, match="activity_kind 'spikes', which the analyses do not "
                                          "know"):

@@ -218,6 +218,21 @@ def warn_nonfinite(rec, res, what):
                       "bins where such samples fall")
 
 
+def _nothing_to_map(dropped, n, min_speed, extent) -> str:
+    """The error when no sample is left to map, naming the argument (or the data) that
+    dropped most of them."""
+    cause = max(dropped, key=dropped.get)
+    k = dropped[cause]
+    if cause == "below_min_speed":
+        first = f"`min_speed` = {min_speed!r} m/s leaves no sample to map: {k} of {n} are slower"
+    elif cause == "outside_extent":
+        where = f"`extent` = {extent!r}" if extent is not None else "the bins' extent"
+        first = f"{where} leaves no sample to map: {k} of {n} positions lie outside it"
+    else:
+        first = f"`rec.position` leaves no sample to map: {k} of {n} are NaN"
+    return f"{first} (samples dropped: {dropped})"
+
+
 def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent,
                    shifts=(0,), n_bins=None, want_sq=False, groups=None, batch=False):
     """Everything a rate map (and its shuffles) is made of.
@@ -242,7 +257,7 @@ def _ratemap_parts(rec, *, bin_size, sigma, min_occupancy, min_speed, by, extent
     n_groups = 1 if labels is None else len(labels)
     n_valid = int((bins >= 0).sum())
     if n_valid == 0:
-        raise ValueError(f"no sample left to map: {dropped} (of {len(bins)} samples)")
+        raise ValueError(_nothing_to_map(dropped, len(bins), min_speed, extent))
     n_cells = grid.nx * grid.ny * n_groups
     one = (rec.sizes["unit"], n_groups, grid.ny, grid.nx)
     if batch:

@@ -67,6 +67,10 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
     The finite-sample bias (information of a spatially uniform unit is > 0 on a finite
     recording) is estimated with ``n_shuffles`` circular time shifts of the activity
     against the trajectory; ``information_corrected = information - mean(shuffled)``.
+    Without shuffles (the default) only the raw estimate is returned: on spike counts,
+    compare units by ``information_corrected`` (``n_shuffles=100``, say): a spatially
+    flat 1 Hz Poisson unit over 10 minutes of 20 ms bins scores 0.70 bits/spike raw,
+    -0.003 corrected.
 
     Parameters
     ----------

@@ -37,9 +37,11 @@ def test_grouped_maps_plot_one_group_with_its_arena():
     rec = two_environment_recording(n_units=4, n_trials=4, samples_per_trial=800)
     maps = hp.ratemaps(rec, bin_size=0.1, by="environment")
     fig = maps.hp.plot(group=1)
-    assert "environment 1" in fig._suptitle.get_text()
+    assert "environment 1 (2 of 2; `group=` shows another)" in fig._suptitle.get_text()
+    # by default the first, and the title says there are others
+    assert "environment 0 (1 of 2;" in maps.hp.plot()._suptitle.get_text()
     by_trial = hp.ratemaps(rec, bin_size=0.1, by="trial").hp.plot(group=3)
-    assert "trial 3" in by_trial._suptitle.get_text()
+    assert "trial 3 (4 of 4;" in by_trial._suptitle.get_text()
     assert by_trial.axes[0].get_lines()  # the trial's arena outline
 
 

@@ -24,7 +24,8 @@ network
 from _paths import MOUSE_NWB
 
 mouse = hp.from_nwb(MOUSE_NWB, position_units="m")
-print(mouse.sizes["unit"], "units,", float(mouse.time[-1] - mouse.time[0]) / 60, "min")
+minutes = float(mouse.time[-1] - mouse.time[0]) / 60
+print(f"{mouse.sizes['unit']} units, {minutes:.1f} min")
 
 # %%
 # The same call on both: occupancy-normalized maps, smoothed by normalized convolution.
@@ -34,9 +35,10 @@ net_maps = hp.ratemaps(network, bin_size=0.04)
 net_maps.isel(unit=slice(0, 8)).hp.plot()
 
 # %%
-# ... and the mouse's cells, in their maze, fire in fields.
+# ... and the mouse's CA1 cells, in their maze, fire in fields (the ``region``
+# coordinate tells them from the anterodorsal thalamus's head-direction cells).
 mouse_maps = hp.ratemaps(mouse, bin_size=0.04)
-mouse_maps.isel(unit=slice(0, 8)).hp.plot()
+mouse_maps.isel(unit=mouse_maps.region.values == "ca1").hp.plot()
 # sphinx_gallery_thumbnail_number = 2
 
 # %%

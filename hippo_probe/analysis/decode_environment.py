@@ -118,6 +118,11 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
     readout retraining (the study's Fig. 3F) asks of a network, with a convex fit run to
     convergence instead of gradient steps.
 
+    The decoder reads the population at one instant (``window`` steps around it), as a
+    network's readout does: on a network's units, or on rates. Spike counts in short bins
+    may hold too few spikes at any one instant to name the arena, even where cells remap:
+    smooth them over time, or bin them more coarsely, first.
+
     Parameters
     ----------
     rec : xarray.Dataset

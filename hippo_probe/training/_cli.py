@@ -65,7 +65,7 @@ def add_commands(sub):
                    help="the study's network (faithful, default) or a labelled departure: "
                         "nonneg, dale, placecells (hippo_probe.model.variants)")
     p.add_argument("--activity-l1", type=float, default=d.activity_l1, metavar="WEIGHT",
-                   help="L1 cost on the units' activity, WEIGHT * mean |h| (default 0)")
+                   help="L1 cost on the units' activity, WEIGHT * mean |h|")
     p.add_argument("--snapshot-every", type=count(), default=None, metavar="STEPS",
                    help="save the current parameters every STEPS steps as "
                         "FOLDER/snapshots/step_NNNNNN.pt (default: no snapshots)")

@@ -561,6 +561,17 @@ def test_an_argument_that_leaves_nothing_to_map_is_named(kw, words):
         hp.ratemaps(_session(), bin_size=0.1, **kw)
 
 
+@pytest.mark.parametrize("kind, meant", [("spike_counts", "spike_count"), ("Rate", "rate"),
+                                         ("lstm-hidden", "lstm_hidden")])
+def test_a_near_miss_of_a_known_activity_kind_is_refused(kind, meant):
+    """A typo would read spike counts as a generic signal (no division by dt)."""
+    words = f"got {kind!r}: did you mean {meant!r}?"
+    with pytest.raises(RecordingError, match=re.escape(words)):
+        rec(activity_kind=kind)
+    with pytest.raises(RecordingError, match=re.escape(words)):
+        hp.ratemaps(_session().assign_attrs(activity_kind=kind), bin_size=0.1)
+
+
 def test_an_unknown_activity_kind_is_warned_about():
     with pytest.warns(UserWarning, match="activity_kind 'spikes', which the analyses do not "
                                          "know"):

@@ -11,7 +11,7 @@ from .._validators import check_finite, check_option, check_real, check_shape
 from ..errors import RecordingError
 from .layout import assemble, trial_blocks
 from .schema import annotate
-from .validate import _v, validate
+from .validate import _v, check_activity_kind, validate
 
 #: Metres per unit of the position units ``from_arrays`` accepts.
 LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
@@ -279,6 +279,7 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
         values = check_finite("activity", activity).astype(np.float32)
         attrs.setdefault("activity_kind", "rate")
     attrs.setdefault("source", "animal")
+    check_activity_kind(attrs["activity_kind"])
 
     rec = assemble(time=time, trial=trial, trial_time=time - np.repeat(time[starts],
                                                                           stops - starts),

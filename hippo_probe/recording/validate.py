@@ -117,6 +117,7 @@ def _check_attrs(rec):
         _fail("source", f"(dataset attr) must be one of {SOURCES}; got {_v(rec.attrs['source'])}")
     if not rec.attrs["activity_kind"]:
         _fail("activity_kind", "(dataset attr) must be a non-empty string, e.g. 'spike_count'")
+    check_activity_kind(rec.attrs["activity_kind"])
     dt = rec.attrs["dt"]
     if not (np.isfinite(dt) and dt > 0):
         _fail("dt", f"(dataset attr) must be a finite number of seconds > 0; got {_v(dt)}")
@@ -356,6 +357,25 @@ def _check_sample_interval(dt, step, trial, name) -> None:
                     f"apart (fix `dt`, or resample the session)")
 
 
+def check_activity_kind(kind, *, name="activity_kind") -> bool:
+    """Refuse an ``activity_kind`` that is a near miss of a known one (``"spike_counts"``
+    for ``"spike_count"``: its counts would be read as a generic signal, not as spikes
+    per sample); return whether ``kind`` is unknown (any other name: a generic signal)."""
+    import difflib
+
+    from .schema import ACTIVITY_UNITS
+
+    if kind in ACTIVITY_UNITS:
+        return False
+    close = difflib.get_close_matches(str(kind).lower(), list(ACTIVITY_UNITS), n=1,
+                                      cutoff=0.8)
+    if close:
+        _fail(name, f"must be one of the kinds the analyses know {sorted(ACTIVITY_UNITS)} "
+                    f"or another name for a generic signal; got {_v(kind)}: did you mean "
+                    f"{close[0]!r}?")
+    return True
+
+
 def check_analysable(rec, *, name="rec"):
     """The cheap rules of :func:`validate` that every analysis relies on; raise if broken.
 
@@ -415,7 +435,7 @@ def check_analysable(rec, *, name="rec"):
         if not isinstance(kind, str) or not kind:
             _fail("activity_kind", f"(dataset attr of `{name}`) must be a non-empty "
                                    f"string, e.g. 'spike_count'; got {_v(kind)}")
-        if kind not in ACTIVITY_UNITS:
+        if check_activity_kind(kind):
             warnings.warn(f"`{name}` has activity_kind {kind!r}, which the analyses do "
                           f"not know ({sorted(ACTIVITY_UNITS)}): its activity is read as a "
                           "generic signal (no division by dt, no offset for signed units)",

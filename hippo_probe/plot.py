@@ -585,6 +585,10 @@ def correlation_sum(res, *, fig=None, axes=None):
             ax.axvspan(lo, hi, color="C1", alpha=0.2, lw=0)
         b.axhline(d, color="C1", ls="--")
         a.set_title(f"D = {d:.2f}", fontsize=9)
+    else:
+        a.set_title("D = NaN", fontsize=9)
+    fig.suptitle("\n".join(["correlation dimension (Grassberger-Procaccia)",
+                             *_nan_reasons(res)]), fontsize=8)
     a.set_xlabel(_label(res["log_r"]))
     a.set_ylabel(_label(res["log_c"]))
     b.set_xlabel(_label(res["log_r"]))
@@ -607,12 +611,30 @@ def bars(da, *, title="", ax=None):
     """Bar chart of a 1-D result, one bar per entry of its dim. Returns the figure."""
     fig, ax = _one_axes(ax, (3.2, 2.8))
     labels = [str(v) for v in da[da.dims[0]].values]
-    ax.bar(labels, da.values)
+    ax.bar(labels, np.nan_to_num(da.values, nan=0.0))
+    for k, value in enumerate(da.values):
+        if not np.isfinite(value):          # a refused estimate: said, not left blank
+            ax.annotate("NaN", (k, 0), ha="center", va="bottom", fontsize=8, color="0.4")
     ax.set_xlabel(da.dims[0])
     ax.set_ylabel(_label(da))
-    if title:
-        ax.set_title(title, fontsize=9)
+    reasons = _nan_reasons(da, width=48)
+    if not np.isfinite(da.values).any():
+        ax.set_ylim(0, 1)
+    if title or reasons:
+        ax.set_title("\n".join([title, *reasons]).strip(), fontsize=9 if not reasons else 7)
     return fig
+
+
+def _nan_reasons(result, width=90) -> list[str]:
+    """A result's NaN reasons (``attrs["nan_reasons"]``), one line of at most ``width``
+    characters each (the whole reasons are in the attrs)."""
+    import textwrap
+
+    reasons = result.attrs.get("nan_reasons") or {}
+    if isinstance(reasons, str):
+        reasons = {"": reasons}
+    return [textwrap.shorten(f"{k}: NaN, {r}" if k else f"NaN: {r}", width)
+            for k, r in list(reasons.items())[:3]]
 
 
 def class_fractions(cells, *, ax=None):
@@ -772,7 +794,9 @@ def _plot_result(result, **kwargs):
     if kind in ("classification_accuracy", "decode_environment"):
         return accuracy_curve(result, **kwargs)
     if kind == "intrinsic_dimension":
-        return bars(result["dimension"], title="intrinsic dimension", **kwargs)
+        return bars(result["dimension"].assign_attrs(
+            nan_reasons=result.attrs.get("nan_reasons", {})), title="intrinsic dimension",
+            **kwargs)
     if kind == "correlation_dimension":
         return correlation_sum(result, **kwargs)
     if kind == "context_cells":
@@ -783,13 +807,24 @@ def _plot_result(result, **kwargs):
         return bars(result["r2"], title=f"decoding {result.attrs.get('target', '')}",
                     **kwargs)
     if kind in PER_UNIT:
-        return cumulative(result[PER_UNIT[kind]], title=kind.replace("_", " "), **kwargs)
+        return cumulative(_per_group(result[PER_UNIT[kind]]), xlabel=_label(
+            result[PER_UNIT[kind]]), title=kind.replace("_", " "), **kwargs)
     if kind == "map_scorecard":
         raise ValueError("a map_scorecard is a table of numbers with nothing to draw: "
                          "print it, or plot the rate maps it was made from")
     raise ValueError(f"no hippo_probe plot for a result with attrs['analysis'] = {kind!r}; "
                      f"expected the output of a hippo_probe analysis (a recording, or one "
                      f"of: {', '.join(PLOTTED)})")
+
+
+def _per_group(da):
+    """A per-unit measure as one distribution per environment or trial when it has that
+    dim (``by=``), rather than every group's units pooled into one."""
+    extra = [d for d in da.dims if d != "unit"]
+    if not extra:
+        return da
+    dim = extra[0]
+    return {f"{dim} {label}": da.sel({dim: label}).values for label in da[dim].values}
 
 
 #: Per-unit results drawn as the cumulative distribution of one measure over the units.

@@ -106,3 +106,27 @@ def test_correlation_sum_plot():
     x = np.random.default_rng(0).uniform(size=(800, 2)) @ np.eye(2, 8)
     fig = plot.plot_result(hp.correlation_dimension(x))
     assert fig.axes[0].get_title().startswith("D = ")
+
+
+def test_a_per_unit_result_by_environment_draws_one_distribution_each():
+    rec = two_environment_recording(n_units=4, n_trials=4, samples_per_trial=800)
+    fig = hp.spatial_information(rec, by="environment", bin_size=0.1).hp.plot()
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert [label.split(" (")[0] for label in labels] == ["environment 0", "environment 1"]
+    assert all("(n=4" in label for label in labels)
+
+
+def test_refused_estimates_are_shown_with_their_reason():
+    """NaN bars and a D without scaling range say so, instead of an empty panel."""
+    counts = np.random.default_rng(0).poisson(0.05, size=(3000, 6)).astype(float)
+    with pytest.warns(hp.AnalysisWarning):
+        res = hp.intrinsic_dimension(counts)
+    fig = res.hp.plot()
+    title = fig.axes[0].get_title()
+    assert "TwoNN: NaN" in title and "MLE: NaN" in title
+    assert [t.get_text() for t in fig.axes[0].texts] == ["NaN", "NaN"]
+    with pytest.warns(hp.AnalysisWarning, match="correlation dimension is NaN"):
+        cd = hp.correlation_dimension(counts)
+    fig = cd.hp.plot()
+    assert fig.axes[0].get_title() == "D = NaN"
+    assert "NaN: no window of" in fig._suptitle.get_text()

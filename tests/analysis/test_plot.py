@@ -129,4 +129,4 @@ def test_refused_estimates_are_shown_with_their_reason():
         cd = hp.correlation_dimension(counts)
     fig = cd.hp.plot()
     assert fig.axes[0].get_title() == "D = NaN"
-    assert "NaN: no window of" in fig._suptitle.get_text()
+    assert "dimension: NaN, no window of" in fig._suptitle.get_text()

@@ -36,9 +36,11 @@ net_maps.isel(unit=slice(0, 8)).hp.plot()
 
 # %%
 # ... and the mouse's CA1 cells, in their maze, fire in fields (the ``region``
-# coordinate tells them from the anterodorsal thalamus's head-direction cells).
+# coordinate tells them from the anterodorsal thalamus's head-direction cells), outlined
+# here as :func:`hippo_probe.place_fields` detects them.
 mouse_maps = hp.ratemaps(mouse, bin_size=0.04)
-mouse_maps.isel(unit=mouse_maps.region.values == "ca1").hp.plot()
+ca1 = mouse_maps.isel(unit=mouse_maps.region.values == "ca1")
+ca1.hp.plot(fields=hp.place_fields(ca1))
 # sphinx_gallery_thumbnail_number = 2
 
 # %%

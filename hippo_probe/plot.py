@@ -141,6 +141,22 @@ def _pick_group(da, keep, group):
     return (da.isel({d: 0 for d in rest}) if rest else da), dim, label
 
 
+def _field_labels(fields, maps, label):
+    """The ``field_label`` (unit, y, x) of a place_fields result for the units and group
+    of ``maps``; refused if it was made on other bins."""
+    if not isinstance(fields, xr.Dataset) or "field_label" not in fields:
+        raise ValueError(f"`fields` must be the output of hippo_probe.place_fields (with "
+                         f"`field_label`); got {type(fields).__name__}")
+    labels, _, _ = _pick_group(fields["field_label"], ("unit", "y", "x"), label)
+    labels = labels.transpose("unit", "y", "x")
+    if labels.shape[1:] != maps.shape[1:] or not np.allclose(labels["x"], maps["x"]) \
+            or not np.allclose(labels["y"], maps["y"]):
+        raise ValueError(f"`fields` were detected on other bins ({labels.shape[2]} x "
+                         f"{labels.shape[1]}) than these maps ({maps.shape[2]} x "
+                         f"{maps.shape[1]}): make them with hp.place_fields(maps)")
+    return labels.sel(unit=maps["unit"].values)
+
+
 def _group_caption(da, keep, group) -> str:
     """The title's note of the group :func:`_pick_group` shows, and how many there are
     (a grid shows one environment or trial of several)."""
@@ -181,8 +197,10 @@ def _outline(maps, group_dim, label):
     return verts[hit[0]] if hit.size else None
 
 
-def _draw_maps(axes, maps, *, cmap, norms, outline, titles):
-    """One image per unit of ``maps`` (unit, y, x) into ``axes``; unused axes are hidden."""
+def _draw_maps(axes, maps, *, cmap, norms, outline, titles, regions=None):
+    """One image per unit of ``maps`` (unit, y, x) into ``axes``, with each unit's
+    ``regions`` (y, x; > 0 inside, e.g. its place fields) outlined; unused axes are
+    hidden."""
     from matplotlib.ticker import MaxNLocator
 
     plt = _plt()
@@ -199,6 +217,9 @@ def _draw_maps(axes, maps, *, cmap, norms, outline, titles):
         if outline is not None:
             closed = np.vstack([outline, outline[:1]])
             ax.plot(closed[:, 0], closed[:, 1], color="0.2", lw=0.8)
+        if regions is not None and (regions.sel(unit=u).values > 0).any():
+            inside = (regions.sel(unit=u).values > 0).astype(float)
+            ax.contour(x, y, inside, levels=[0.5], colors="white", linewidths=0.9)
         ax.set_xlim(ext[0] - pad, ext[1] + pad)
         ax.set_ylim(ext[2] - pad, ext[3] + pad)
         ax.set_aspect("equal")
@@ -229,7 +250,7 @@ def _colorbar(fig, axes, mappable, label, ticks=None, ticklabels=None):
 
 
 def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", panel=1.6,
-                 scale="unit", fig=None, axes=None):
+                 scale="unit", fields=None, fig=None, axes=None):
     """A grid of rate maps, one panel per unit, with the arena outline and a colour bar.
 
     Each panel is titled with its unit, the unit's ``region`` when the result has one,
@@ -247,6 +268,9 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
         ``"unit"``: each panel from 0 (or its minimum, when negative) to its own peak,
         written in its title, the colour bar reading 0..peak; ``"shared"``: one scale
         for all panels, the colour bar in the maps' units.
+    fields : xarray.Dataset, optional
+        Output of :func:`hippo_probe.place_fields` on these maps: each unit's fields are
+        outlined (white) and counted in its title.
     fig : matplotlib Figure or SubFigure, optional
         Draw the grid in this figure (e.g. one of ``plt.figure().subfigures(1, 2)``).
     axes : array of matplotlib Axes, optional
@@ -266,6 +290,7 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
     caption = _group_caption(maps, ("unit", "y", "x"), group)
     maps, group_dim, label = _pick_group(maps, ("unit", "y", "x"), group)
     maps = _units(maps, units, 64).transpose("unit", "y", "x")
+    regions = None if fields is None else _field_labels(fields, maps, label)
     fig, axes = _panels(maps.sizes["unit"], max_cols=max_cols, panel=panel, fig=fig,
                         axes=axes)
     values = maps.values
@@ -289,13 +314,17 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
         line = f"peak {_num(peak)}{units_txt}"
         if low < 0:
             line += f", min {_num(low)}"
+        if regions is not None:
+            numbers = regions.sel(unit=u).values
+            n_fields = len(np.unique(numbers[numbers > 0]))
+            line += f", {n_fields} field{'s' if n_fields != 1 else ''}"
         titles.append(f"{head}\n{line}")
         lo = min(float(low), 0.0)
         norms.append(shared if scale == "shared" else
                      Normalize(lo, float(peak) if peak > lo else lo + 1.0))
     colours = _draw_maps(axes, maps, cmap=cmap, norms=norms,
                          outline=_outline(maps, group_dim, label),
-                         titles=titles)
+                         titles=titles, regions=regions)
     used = axes[:maps.sizes["unit"]]
     if scale == "shared" and finite.any():
         _colorbar(fig, used, ScalarMappable(shared, colours), _label(maps))

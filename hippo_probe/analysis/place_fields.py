@@ -263,6 +263,12 @@ def place_fields(rec_or_maps, *, threshold=None, min_bins=None, min_peak=None,
     >>> fields = place_fields(rec, bin_size=0.05)
     >>> int(fields.n_fields[0])
     2
+
+    The fields outlined on their maps (``ratemap_grid``'s ``fields=``):
+
+    >>> from hippo_probe import ratemaps
+    >>> maps = ratemaps(rec, bin_size=0.05)
+    >>> fig = maps.hp.plot(fields=place_fields(maps))
     """
     threshold = check_number("threshold", PLACE_FIELD.threshold if threshold is None
                              else threshold, low=0, high=1, low_inclusive=True,

@@ -130,3 +130,17 @@ def test_refused_estimates_are_shown_with_their_reason():
     fig = cd.hp.plot()
     assert fig.axes[0].get_title() == "D = NaN"
     assert "dimension: NaN, no window of" in fig._suptitle.get_text()
+
+
+def test_rate_maps_outline_their_place_fields(place):
+    maps = hp.ratemaps(place, bin_size=0.05)
+    fields = hp.place_fields(maps)
+    fig = maps.hp.plot(fields=fields)
+    n = int(fields["n_fields"].isel(unit=0))
+    assert n >= 1
+    assert f"{n} field" in fig.axes[0].get_title()
+    assert fig.axes[0].collections            # the fields' outline (a contour)
+    with pytest.raises(ValueError, match="detected on other bins"):
+        maps.hp.plot(fields=hp.place_fields(hp.ratemaps(place, bin_size=0.1)))
+    with pytest.raises(ValueError, match="`fields` must be the output of"):
+        maps.hp.plot(fields=maps)

@@ -425,7 +425,10 @@ def _trained(name: str, info: dict) -> str:
     if info.get("fit_trials"):
         return (f"{name} fitted to convergence on {info['fit_trials']:,} training trials "
                 f"(C = {info['fit_c']:g})")
-    return (f"{name} {info['steps_done']} of {info['steps_budget']} steps"
+    # a network continued from another (--init-from) counts its last pass only
+    before = (f" (its last pass; the one before: {info['base_network_steps']} steps of "
+              f"{info['base_network']})" if info.get("base_network") else "")
+    return (f"{name} {info['steps_done']} of {info['steps_budget']} steps" + before
             + ("" if info.get("finished") else " (training not finished)")
             + _stopped(info.get("stopped")))
 

@@ -516,3 +516,13 @@ def test_a_worlds_runs_share_the_filters_of_the_same_trials_only(tmp_path, monke
                                           "darkness", 1))
     assert calls[1:] == [(base.trials + 1, base.particles),
                          (base.trials, base.particles + 10)]
+
+
+def test_a_continued_network_names_its_last_pass_and_the_one_before():
+    from hippo_probe.paper.results import _trained
+    info = {"steps_done": 3500, "steps_budget": 3500, "finished": True}
+    assert _trained("net", info) == "net 3500 of 3500 steps"
+    continued = _trained("net", {**info, "base_network": "generalized",
+                                 "base_network_steps": 6000})
+    assert continued == ("net 3500 of 3500 steps (its last pass; the one before: 6000 "
+                         "steps of generalized)")

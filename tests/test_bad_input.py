@@ -878,3 +878,16 @@ def test_chunks_that_are_not_those_written_are_refused(tmp_path, damage, words):
         (path / "zarr.json").write_text(js.dumps(meta))
     with pytest.raises(RecordingError, match=words):
         open_recording(path)
+
+
+def test_head_direction_in_degrees_that_wraps_is_refused():
+    """Degrees wrap at 360, which radians never do between two samples."""
+    turning = (np.arange(400) * 3.0) % 360                # degrees, wrapping every 120
+    with pytest.raises(ValueError, match=r"`head_direction` must be in radians; it wraps "
+                                         r"at 360 \(from 357 to 0 between samples 119 "
+                                         r"and 120\)"):
+        rec(head_direction=turning)
+    # unwrapped radians (a cumulative angle past 2 pi) are wrapped, with the warning
+    with pytest.warns(UserWarning, match="more than 2 pi"):
+        r = rec(head_direction=np.arange(400) * 0.05)
+    assert np.abs(r.head_direction.values).max() <= np.pi

@@ -125,6 +125,21 @@ def _warn_spikes_beyond_samples(spike_times, time):
                       UserWarning, stacklevel=3)
 
 
+def _refuse_wrapped_degrees(head_direction, largest) -> None:
+    """Refuse a head direction that wraps at 360 (a jump of more than 180 between
+    consecutive samples, every value within 360 in magnitude): degrees, which would be
+    read as radians. Unwrapped radians change by less than pi a sample and pass."""
+    if not 2 * np.pi + 1e-9 < largest <= 360 + 1e-9:
+        return
+    step = np.abs(np.diff(head_direction))
+    jumps = np.flatnonzero(step > 180)          # NaN steps compare False
+    if jumps.size:
+        i = int(jumps[0])
+        raise ValueError(f"`head_direction` must be in radians; it wraps at 360 (from "
+                         f"{head_direction[i]:.4g} to {head_direction[i + 1]:.4g} between "
+                         f"samples {i} and {i + 1}): degrees? pass np.deg2rad(...)")
+
+
 def _unit_coords(unit, n_units):
     """Unit ids and extra unit coords from ``None``, ids, or a table of columns."""
     if unit is None:
@@ -296,6 +311,7 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
             "head_direction", head_direction).astype(float), (n,))
         check_finite("head_direction", head_direction, allow_nan=True)
         largest = np.nanmax(np.abs(head_direction), initial=0.0)
+        _refuse_wrapped_degrees(head_direction, largest)
         if largest > 2 * np.pi + 1e-9:
             warnings.warn(f"`head_direction` reaches {largest:.4g} in magnitude, more than "
                           f"2 pi: if it is in degrees, pass np.deg2rad(...) "

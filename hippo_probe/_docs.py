@@ -42,7 +42,10 @@ extent : (x_min, x_max, y_min, y_max), optional
     "n_shuffles": """\
 n_shuffles : int, optional
     Circular time shifts of the activity against the behaviour, each by at least
-    ``SHUFFLE.min_shift`` (20) s, for the null distribution (default 100; 0 = none).""",
+    ``SHUFFLE.min_shift`` (20) s, for the null distribution (default 100; 0 = none). Not
+    with ``by``: a shift over the whole recording would mix the groups' activity into
+    each group's null (refused; the default is then 0). Shuffle a group alone by
+    selecting its trials (:func:`~hippo_probe.select_trials`).""",
     "seed": """\
 seed : int, optional
     Seed of the shuffles' shifts (default ``SHUFFLE.seed``): the same seed, the same

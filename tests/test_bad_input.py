@@ -512,10 +512,10 @@ def test_every_analysis_refuses_spike_counts_that_are_not_counts(analysis, kind)
     bad = _spike_counts(_session(), COUNT_DAMAGE[kind])
     index = "(0, 0)" if kind.startswith("counts") else "(500, 2)"
     with pytest.raises(RecordingError, match=r"whole numbers >= 0; got .* at index "
-                                             + re.escape(index)):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            ANALYSES[analysis](bad)
+                                             + re.escape(index)), \
+            warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ANALYSES[analysis](bad)
 
 
 def test_valid_spike_counts_pass_the_entry_check():
@@ -551,10 +551,10 @@ def test_a_lazy_session_of_fractional_counts_is_not_saved(tmp_path):
 
 
 @pytest.mark.parametrize("kw, words", [
-    (dict(min_speed=100), "`min_speed` = 100 m/s leaves no sample to map: 720 of 720 are "
-                          "slower"),
-    (dict(extent=(2, 3, 2, 3)), "`extent` = (2, 3, 2, 3) leaves no sample to map: 720 of "
-                                "720 positions lie outside it"),
+    ({"min_speed": 100}, ("`min_speed` = 100 m/s leaves no sample to map: 720 of 720 are "
+                          "slower")),
+    ({"extent": (2, 3, 2, 3)}, ("`extent` = (2, 3, 2, 3) leaves no sample to map: 720 of "
+                                "720 positions lie outside it")),
 ])
 def test_an_argument_that_leaves_nothing_to_map_is_named(kw, words):
     with pytest.raises(ValueError, match=re.escape(words)):
@@ -891,3 +891,23 @@ def test_head_direction_in_degrees_that_wraps_is_refused():
     with pytest.warns(UserWarning, match="more than 2 pi"):
         r = rec(head_direction=np.arange(400) * 0.05)
     assert np.abs(r.head_direction.values).max() <= np.pi
+
+
+@pytest.mark.parametrize("analysis", ["spatial_information", "head_direction_tuning",
+                                      "grid_score", "border_score"])
+def test_shuffles_per_group_are_refused_and_not_drawn_by_default(analysis):
+    """A shift over the whole recording would mix the environments' activity into each
+    one's null (a flat unit in one arena reads as significant there)."""
+    call = getattr(hp, analysis)
+    kw = {} if analysis == "head_direction_tuning" else {"bin_size": 0.1}
+    with pytest.raises(ValueError, match=r"`n_shuffles` = 3 with `by` = 'environment': the "
+                                         r"time shifts run over the whole recording"):
+        call(_session(), by="environment", n_shuffles=3, **kw)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = call(_session(), by="environment", **kw)         # no shuffles by default
+        alone = call(hp.select_trials(_session(), environments=1), n_shuffles=3, seed=0,
+                     **kw)
+    assert "p_value" not in res or np.isnan(res["p_value"]).all()
+    assert res.attrs.get("n_shuffles", 0) == 0
+    assert alone.attrs["n_shuffles"] == 3

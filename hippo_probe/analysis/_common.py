@@ -237,9 +237,22 @@ def circular_shifts(n: int, dt: float, n_shuffles: int, seed: int | None) -> np.
     return rng.integers(max(low, 1), n - max(low, 1) + 1, size=n_shuffles)
 
 
-def shifts_for(rec, n_shuffles, seed):
+def shifts_for(rec, n_shuffles, seed, by=None):
     """``[0, s_1, ..., s_n]``: no shift (the observed score), then the random shifts of
-    :func:`circular_shifts`."""
+    :func:`circular_shifts`.
+
+    Refused with ``by`` (per environment or trial): a shift runs over the whole
+    recording, so one group's shuffled maps would hold other groups' activity, and its
+    null distribution would be the pooled recording's, not its own (a unit flat in one
+    arena and firing in the other reads as significant in the first).
+    """
+    if n_shuffles and by is not None:
+        raise ValueError(
+            f"`n_shuffles` = {n_shuffles} with `by` = {by!r}: the time shifts run over the "
+            f"whole recording, so each {by}'s shuffles would mix in the other {by}s' "
+            f"activity and give a wrong null. Shuffle each {by} alone: select its trials "
+            f"(e.g. hp.select_trials(rec, environments=k)) and call without `by`, or pass "
+            f"n_shuffles=0 for the scores alone")
     return np.r_[0, circular_shifts(rec.sizes["time"], sample_dt(rec), n_shuffles,
                                     seed)].astype(np.int64)
 

@@ -90,10 +90,9 @@ class MapStack:
     The samples are binned once per batch of shifts (:func:`_ratemap_parts`), unsmoothed;
     the smoothed maps come from the same sums by normalized convolution, so one pass gives
     both. Every shift shares the occupancy (a circular shift moves activity against a
-    fixed trajectory). With ``by=`` the shift runs over the whole recording, so a group's
-    shuffled maps hold activity from other groups too: where the mean rate differs between
-    environments (rate remapping), each group's null distribution is that of the pooled
-    recording, not of the group alone.
+    fixed trajectory). Shuffles with ``by=`` are refused (:func:`~._common.shifts_for`):
+    a shift runs over the whole recording, so a group's shuffled maps would hold other
+    groups' activity.
 
     Attributes
     ----------
@@ -109,7 +108,7 @@ class MapStack:
     def __init__(self, rec, *, n_shuffles, seed, bin_size, sigma, min_speed, by, extent,
                  batch=None):
         self.rec = rec
-        self.shifts = shifts_for(rec, n_shuffles, seed)
+        self.shifts = shifts_for(rec, n_shuffles, seed, by)
         self.sigma = check_number("sigma", sigma, low=0, low_inclusive=True)
         self._kw = dict(bin_size=bin_size, sigma=0.0, min_occupancy=None,
                         min_speed=min_speed, by=by, extent=extent)

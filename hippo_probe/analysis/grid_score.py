@@ -457,7 +457,9 @@ def grid_score(rec_or_maps, *, n_shuffles=None, seed=None, percentile=None, thre
         A recording (maps made here, smoothed by one bin by default; may be dask-backed)
         or the output of :func:`ratemaps` (no shuffles then).
     n_shuffles : int, optional
-        Default 100 for a recording, 0 for maps.
+        Default 100 for a recording without ``by``, 0 for maps or with ``by`` (refused
+        with ``by``: the shifts would mix the groups' activity into each group's null;
+        shuffle a group alone by selecting its trials, :func:`~hippo_probe.select_trials`).
     %(seed)s
     percentile : float, optional
         Percentile of the shuffles used as threshold (default 95).
@@ -527,7 +529,9 @@ def grid_score(rec_or_maps, *, n_shuffles=None, seed=None, percentile=None, thre
     else:
         rec = _common.check_recording(rec_or_maps, ["activity", "position"],
                                       why="grid score")
-        n_shuffles = CELL_CLASS.n_shuffles if n_shuffles is None else n_shuffles
+        # by default no shuffles with `by`: they would mix the groups (shifts_for)
+        n_shuffles = (0 if by is not None else CELL_CLASS.n_shuffles) \
+            if n_shuffles is None else n_shuffles
         stack = MapStack(rec, n_shuffles=n_shuffles, seed=seed, bin_size=bin_size,
                          sigma=GRID.sigma if sigma is None else sigma, min_speed=min_speed,
                          by=by, extent=extent)

@@ -160,7 +160,9 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     n_bins = check_number("n_bins", HEAD_DIRECTION.n_bins if n_bins is None else n_bins,
                           low=2, low_inclusive=True, integer=True)
     sigma = check_number("sigma", sigma, low=0, low_inclusive=True)
-    n_shuffles = HEAD_DIRECTION.n_shuffles if n_shuffles is None else n_shuffles
+    # by default no shuffles with `by`: they would mix the groups (shifts_for)
+    n_shuffles = (0 if by is not None else HEAD_DIRECTION.n_shuffles) \
+        if n_shuffles is None else n_shuffles
     dt = _common.sample_dt(rec)
     bins = direction_bins(_common.values(rec["head_direction"]), n_bins)
     n_dir_nan = int((bins < 0).sum())
@@ -173,7 +175,7 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
                          "all NaN" + (" or slower than min_speed" if min_speed else ""))
     codes, labels, dim = _common.group_codes(rec, by)
     n_groups = 1 if labels is None else len(labels)
-    shifts = _common.shifts_for(rec, n_shuffles, seed)
+    shifts = _common.shifts_for(rec, n_shuffles, seed, by)
     check_allocation("n_bins", (rec.sizes["unit"], n_groups, n_bins),
                      shuffles=len(shifts))
     res = tuning_sums(rec, bins, codes, n_groups, n_bins, shifts)

@@ -57,12 +57,17 @@ def remapping_similarity(rec, *, bin_size=None, sigma=None, min_speed=None, exte
     .. math:: s_{ab} = \\mathrm{corr}\\bigl(\\{\\lambda^{a}_{u,i}\\},
               \\{\\lambda^{b}_{u,i}\\}\\bigr)_{u,\\; i \\in V_a \\cap V_b}
 
+    one Pearson correlation over every unit and shared bin at once. Leutgeb et al. (2005)
+    correlate the population vectors bin by bin and average the bins' correlations; the
+    pooled one also counts how the population's mean rate varies over the bins, which
+    the bin-by-bin one removes, so compare values of one kind only.
+
     Pairs are labelled same- or different-environment; global remapping shows as high
     similarity within and near-zero similarity across environments. Control: the same
     split after permuting the trials' environment labels (it must erase the difference).
 
-    The pooled correlation keeps the differences between units' mean levels (as the
-    classic population-vector correlation does), so units with large, arena-independent
+    The pooled correlation keeps the differences between units' mean levels (as a
+    population-vector correlation does), so units with large, arena-independent
     offsets — an LSTM's h often has them — raise the similarity of *every* pair, across
     environments too. ``center_units=True`` removes them first: each unit's maps minus
     its mean over all trials and bins, :math:`\lambda_{u,i} - \bar\lambda_u`, so only

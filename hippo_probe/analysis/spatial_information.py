@@ -78,7 +78,9 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
         A recording (maps are made here, unsmoothed by default) or the output of
         :func:`ratemaps` (which keeps occupancy and ``activity_min``).
     n_shuffles : int, optional
-        Number of circular time-shift shuffles (default 0; needs a recording).
+        Number of circular time-shift shuffles (default 0; needs a recording; refused
+        with ``by``: the shifts would mix the groups' activity into each group's null;
+        shuffle a group alone by selecting its trials, :func:`~hippo_probe.select_trials`).
     %(seed)s
     %(bin_size)s
     %(sigma_unsmoothed)s
@@ -91,7 +93,8 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
     -------
     xarray.Dataset
         ``information`` (unit, [group]) in bits per unit of activity (bits/spike for
-        spikes), ``information_rate`` in bits/s, ``mean_rate``; with shuffles also
+        spikes), ``information_rate`` in bits/s (spikes and rates in Hz; NaN for other
+        activity, which has no rate), ``mean_rate``; with shuffles also
         ``shuffle_mean``, ``shuffle_std``, ``information_corrected`` and ``p_value``.
 
     References
@@ -126,7 +129,7 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
     else:
         rec = _common.check_recording(rec_or_maps, ["activity", "position"],
                                       why="spatial information")
-        shifts = _common.shifts_for(rec, n_shuffles, seed)
+        shifts = _common.shifts_for(rec, n_shuffles, seed, by)
         parts = _ratemap_parts(
             rec, bin_size=bin_size, sigma=INFORMATION.sigma if sigma is None else sigma,
             min_occupancy=min_occupancy, min_speed=min_speed, by=by, extent=extent,
@@ -149,14 +152,17 @@ def spatial_information(rec_or_maps, *, n_shuffles=None, seed=None, bin_size=Non
     info, mean = skaggs_information(maps.values - offset, occ, axes)
 
     is_hz = maps.attrs.get("units") == "Hz"
-    dt = float(maps.attrs.get("dt", 1.0))
-    per_second = mean if is_hz else mean / dt
     coords = {k: c for k, c in maps.coords.items() if set(c.dims) <= set(lead)}
     unit_info = "bits/spike" if is_hz else "bits per unit of activity"
     out = xr.Dataset(coords=coords)
     out["information"] = (lead, info, {"units": unit_info, "long_name": "spatial information"})
-    out["information_rate"] = (lead, info * per_second,
-                               {"units": "bits/s", "long_name": "spatial information rate"})
+    # bits/s needs a rate of events (spikes in Hz): a signal in other units has none
+    rate_attrs = {"units": "bits/s", "long_name": "spatial information rate"}
+    if not is_hz:
+        rate_attrs["note"] = (f"NaN: bits/s is information x mean firing rate (Hz); this "
+                              f"activity is in {maps.attrs.get('units', '1')!r}, not a rate")
+    out["information_rate"] = (lead, info * mean if is_hz else np.full_like(info, np.nan),
+                               rate_attrs)
     out["mean_rate"] = (lead, mean, {"units": maps.attrs.get("units", "1"),
                                      "long_name": "mean rate (after the non-negative shift)"})
     if stack is not None and len(stack) > 1:

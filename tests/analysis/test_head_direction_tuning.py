@@ -84,11 +84,15 @@ def test_lazy_equals_eager_and_by_environment():
     rec = rec.assign_coords(environment=("time", np.repeat([0, 1], 3000),
                                          rec.environment.attrs),
                             trial=("time", np.repeat([0, 1], 3000), rec.trial.attrs))
-    eager = hp.head_direction_tuning(rec, n_shuffles=5, by="environment")
-    lazy = hp.head_direction_tuning(rec.chunk({"time": 1000}), n_shuffles=5, by="environment")
+    eager = hp.head_direction_tuning(rec, by="environment")
+    lazy = hp.head_direction_tuning(rec.chunk({"time": 1000}), by="environment")
     assert eager.mean_vector_length.dims == ("unit", "environment")
-    for name in ("tuning_curve", "mean_vector_length", "p_value"):
+    assert eager.attrs["n_shuffles"] == 0          # none by default with `by`
+    for name in ("tuning_curve", "mean_vector_length"):
         np.testing.assert_allclose(lazy[name], eager[name], rtol=1e-10)
+    eager = hp.head_direction_tuning(rec, n_shuffles=5)
+    lazy = hp.head_direction_tuning(rec.chunk({"time": 1000}), n_shuffles=5)
+    np.testing.assert_allclose(lazy["p_value"], eager["p_value"], rtol=1e-10)
 
 
 def test_bad_input():

@@ -130,3 +130,21 @@ def test_negative_values_in_a_nonnegative_kind_are_shifted_with_a_warning():
     # unit 0 (0/1 -> -0.5/0.5): shifting by the map's minimum restores the 0/1 unit
     q = (_half_arena_recording()[1][:, 0] < 0).mean()
     assert info.information.sel(unit=0).item() == pytest.approx(-np.log2(q), rel=1e-6)
+
+
+def test_the_information_rate_is_bits_per_second_of_spikes_only():
+    """bits/s = bits/spike x spikes/s; a signal that is not a rate has no bits/s (it
+    used to depend on the sample interval)."""
+    rng = np.random.default_rng(5)
+    t = np.arange(30000) * 0.02
+    xy = np.c_[0.5 * np.cos(t / 7), 0.5 * np.sin(t / 5)]
+    rate = 10 * np.exp(-((xy - 0.2) ** 2).sum(1) / 0.02)
+    spikes = hp.recording.from_arrays(t, xy, activity=rng.poisson(rate * 0.02)[:, None]
+                                      .astype(float), activity_kind="spike_count")
+    res = hp.spatial_information(spikes, bin_size=0.05)
+    np.testing.assert_allclose(res.information_rate, res.information * res.mean_rate)
+    assert res.information_rate.attrs["units"] == "bits/s"
+    signal = spikes.assign_attrs(activity_kind="lstm_hidden")
+    res = hp.spatial_information(signal, bin_size=0.05)
+    assert np.isfinite(res.information).all() and np.isnan(res.information_rate).all()
+    assert "not a rate" in res.information_rate.attrs["note"]

@@ -90,6 +90,41 @@ def network_parameters(obj: dict, path) -> dict:
 def _readout_parameters(obj: dict, path) -> dict:
     """A readout file's parameters: its base network's, with the readout's classifier."""
     from ..errors import CheckpointError
+
+    base = _readout_base(obj, path)
+    head = obj["model"]
+    if set(head) != {"classifier.weight", "classifier.bias"}:
+        raise CheckpointError(f"`checkpoint` {str(path)!r} is a readout and must hold only "
+                              f"the classifier; got {sorted(head)}")
+    return {**(base.get("best_model") or base["model"]), **head}
+
+
+def position_task(obj: dict, path) -> str | None:
+    """The task whose frame a loaded network file's (x, y) readout speaks: the task it
+    was trained on, or, where its training fitted the arena readout alone
+    (``train_only = "classifier"``: a readout of a frozen network), its base network's
+    (the generalized network's start-relative frame, though the readout was fitted on the
+    specialized task). None where that base cannot be found."""
+    cfg = obj.get("config") or {}
+    if not (isinstance(cfg, dict) and cfg.get("train_only") == "classifier"):
+        return obj.get("task")
+    if READOUT_OF in obj:
+        return position_task(_readout_base(obj, path), path)
+    # a readout trained by gradient steps holds all its parameters: its base by name
+    from ..pretrained import NAMES, resolve_network_file
+    from .checkpoint import load
+
+    base = cfg.get("init_from")
+    if isinstance(base, str) and base in NAMES:
+        base_path = resolve_network_file(base)
+        return position_task(load(base_path), base_path)
+    return None
+
+
+def _readout_base(obj: dict, path) -> dict:
+    """The loaded network file a readout file reads (by name, seed and parameters'
+    digest: beside it, then among the shipped networks)."""
+    from ..errors import CheckpointError
     from .checkpoint import load
 
     ref = obj[READOUT_OF]
@@ -111,11 +146,7 @@ def _readout_parameters(obj: dict, path) -> dict:
                if not candidates else
                f"but {', '.join(str(c) for c in candidates)} holds other parameters than "
                f"those it was fitted on; refit it on that version of the network"))
-    head = obj["model"]
-    if set(head) != {"classifier.weight", "classifier.bias"}:
-        raise CheckpointError(f"`checkpoint` {str(path)!r} is a readout and must hold only "
-                              f"the classifier; got {sorted(head)}")
-    return {**(base.get("best_model") or base["model"]), **head}
+    return base
 
 
 def _check_declared_shapes(config, state, path) -> None:
@@ -162,8 +193,10 @@ def load_pretrained(name: str, seed: int | None = None):
     Returns
     -------
     Navigator
-        In eval mode, float32, with three attributes from its file: ``net.task`` (the task
-        it was trained on, e.g. "generalized"), ``net.world`` ("darkness" or "compass":
+        In eval mode, float32, with attributes from its file: ``net.task`` (the task it
+        was trained on, e.g. "generalized"), ``net.position_task`` (the task whose frame
+        its (x, y) readout speaks: a fitted arena readout keeps its network's),
+        ``net.world`` ("darkness" or "compass":
         make its trials with ``world=net.world``) and ``net.info`` (a dict: "task",
         "world", "config" (the training configuration), "class_weight", "test" (its
         test-split errors), "steps_done", "finished", "base_network" and, for a readout,
@@ -213,6 +246,7 @@ def load_pretrained(name: str, seed: int | None = None):
                               f"version cannot build ({type(err).__name__}: {err})") from None
     load_into(net, state, path)
     net.task = obj.get("task")
+    net.position_task = position_task(obj, path)
     net.world = checkpoint_world(obj)
     net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test",
                                         "steps_done", "finished", "base_network",

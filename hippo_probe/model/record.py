@@ -59,6 +59,17 @@ def baselines_from_dataset(ds, batch) -> dict:
             if name in ds}
 
 
+def _in_arenas(batch, verts) -> bool:
+    """Whether every trial of ``batch`` is in the arena ``verts[its environment id]``."""
+    env = np.asarray(batch.environment)
+    if env.size and (env.min() < 0 or env.max() >= len(verts)):
+        return False
+    ids, first = np.unique(env, return_index=True)
+    trial_verts = np.asarray(batch.arena_vertices)[first]
+    return trial_verts.shape[1:] == verts.shape[1:] and \
+        bool(np.allclose(trial_verts, verts[ids], equal_nan=True))
+
+
 @torch.no_grad()
 def _run_network(network, batch, chunk: int = 250, *, progress: bool = False):
     """The network on a TrialBatch, in the recording's layout: (h (B*T, H) float32,
@@ -153,8 +164,10 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
     h, xy, prob = _run_network(network, batch, chunk, progress=progress)
     T, B, H = xy.shape[0], xy.shape[1], h.shape[1]
     net_task = getattr(network, "task", None) or batch.task
-    # the readout speaks in the frame of the task the network was trained on
-    if task_config(net_task).target == "start_relative":
+    # the position readout speaks in the frame of the task it was trained on (a fitted
+    # arena readout's network keeps its base network's position readout)
+    if task_config(getattr(network, "position_task", None) or net_task).target \
+            == "start_relative":
         estimate = xy + batch.start[None]
     else:
         estimate = xy
@@ -169,12 +182,22 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
         world=task.world.name, heading_drift_rad_per_sqrt_s=float(task.world.noise.heading_drift),
         network_world=str((getattr(network, "info", None) or {}).get("world", "unknown")))
 
-    # environment table: the classifier's classes (all arenas of its task), else every
-    # arena of the batch's task (fixed arenas) or of its trials (novel arenas)
+    # environment table: the classifier's classes (all arenas of its task) when the trials
+    # are in them, else every arena of the batch's task (fixed arenas) or of its trials
+    # (novel arenas)
     if prob is not None:
         classes = task_config(net_task if task_config(net_task).classify else "specialized")
+        class_verts = np.asarray(fixed_arenas(classes.name, classes))
+        if not _in_arenas(batch, class_verts):
+            warnings.warn(f"`network` names the {len(class_verts)} arenas of the "
+                          f"{classes.name!r} task, and `batch` holds {batch.task!r} trials "
+                          f"in other arenas: its class probabilities and arena readout are "
+                          f"left out of the recording (they would be scored against "
+                          f"unrelated labels)", UserWarning, stacklevel=2)
+            prob = None
+    if prob is not None:
         env_ids = np.arange(classes.n_arenas)
-        verts = np.asarray(fixed_arenas(classes.name, classes))
+        verts = class_verts
     elif task.arenas == "fixed":
         env_ids = np.arange(task.n_arenas)
         verts = np.asarray(fixed_arenas(batch.task, task))

@@ -207,8 +207,8 @@ def _evaluate(a):
     world = a.world or net.world
     batch = make_trials(task, a.trials, a.split, a.seed, world=world)
     weight = (net.info.get("class_weight") or 0.0)
-    # score the readout in the frame of the task the network was trained on
-    start_relative = task_config(net.task).target == "start_relative"
+    # score the (x, y) readout in the frame of the task it was trained on
+    start_relative = task_config(net.position_task or net.task).target == "start_relative"
     target = batch.position - batch.start[None] if start_relative else batch.position
     metrics = evaluate_network(net, batch, weight, target=target,
                                progress=not a.no_progress)

@@ -118,3 +118,47 @@ def test_baselines_from_dataset_matches_trials(tmp_path):
     other = hp.tasks.make_trials("generalized", 2, "test", 1)
     with pytest.raises(ValueError, match="other trials"):
         baselines_from_dataset(ds, other)
+
+
+def test_a_fitted_arena_readout_keeps_its_networks_position_frame():
+    """generalized_readout is the generalized network with a classifier fitted on the
+    specialized task: its (x, y) readout is still start-relative, so on the same trials
+    its estimate is the generalized network's (it was the arena frame's, off by the
+    start)."""
+    gen = hp.load_pretrained("generalized")
+    readout = hp.load_pretrained("generalized_readout")
+    assert (readout.task, readout.position_task) == ("specialized", "generalized")
+    assert gen.position_task == "generalized"
+    batch = hp.tasks.make_trials("generalized", 3, "test", 0, world=gen.world)
+    a, b = hp.record(gen, batch), hp.record(readout, batch)
+    np.testing.assert_array_equal(a.activity.values, b.activity.values)
+    np.testing.assert_allclose(b.estimate.values, a.estimate.values, atol=1e-6)
+
+
+def test_a_classifier_recorded_outside_its_arenas_keeps_the_trials_arenas():
+    """The specialized network on localization trials: its class probabilities name the
+    specialized task's arenas, not the trial's, so they are left out (warned) and the
+    environment table is the trials' own arena, whose outline bounds the maps."""
+    net = hp.load_pretrained("specialized")
+    loc = hp.tasks.make_trials("localization", 2, "test", 0, world=net.world)
+    with pytest.warns(UserWarning, match="class probabilities and arena readout are left "
+                                         "out"):
+        rec = hp.record(net, loc)
+    assert "class_probability" not in rec and "readout_weight" not in rec
+    np.testing.assert_allclose(rec.arena_vertices.values[0], loc.arena_vertices[0])
+    with pytest.raises(ValueError, match="class_probability"):
+        hp.classification_accuracy(rec)
+    # in its own arenas the classifier's table stays
+    spec = hp.record(net, hp.tasks.make_trials("specialized", 2, "test", 0, world=net.world))
+    assert spec.sizes["environment_id"] == 100 and "class_probability" in spec
+
+
+def test_evaluate_scores_a_fitted_readout_in_its_networks_frame(capsys):
+    from hippo_probe.cli import main
+    errors = []
+    for name in ("generalized", "generalized_readout"):
+        assert main(["evaluate", name, "--task", "generalized", "--trials", "3",
+                     "--no-progress"]) == 0
+        out = capsys.readouterr().out
+        errors.append(float(out.split('"mean_error_m": ')[1].split(",")[0]))
+    assert errors[0] == errors[1]

@@ -144,9 +144,12 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
     xarray.Dataset
         Over ``trial_time`` (the ``times``): ``accuracy`` (held-out trials),
         ``train_accuracy`` (the training trials' own samples at ``t``: far above
-        ``accuracy`` means the decoder memorizes trials) and ``n_scored`` (held-out
+        ``accuracy`` means the decoder memorizes trials), ``n_scored`` (held-out
         samples scored: one per trial where ``t`` falls on a sample, two where it falls
-        midway between two); attrs ``chance`` (1 / environments) and the parameters.
+        midway between two) and ``n_unseen`` (held-out samples in an environment the
+        decoder was not trained on, e.g. an environment of a single trial: they cannot be
+        named, so they are not scored, with a warning); attrs ``chance`` (1 /
+        environments) and the parameters.
 
     References
     ----------
@@ -193,7 +196,7 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
     if test is None and n_trials < n_folds:
         raise ValueError(f"cross-validation by trial needs at least `n_folds` = {n_folds} "
                          f"trials; `rec` has {n_trials}")
-    acc, train_acc, scored, reasons = [], [], [], []
+    acc, train_acc, scored, unseen, reasons = [], [], [], [], []
     longest = float(np.max(_common.values(rec["trial_time"])))
     for t in times:
         fit_idx = _samples(rec, t, (window + 0.5) * dt)
@@ -208,6 +211,7 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
             acc.append(np.nan)
             train_acc.append(np.nan)
             scored.append(0)
+            unseen.append(0)
             reasons.append(reason)
             continue
         reasons.append(None)
@@ -219,15 +223,18 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
             if not len(test_idx):
                 reasons[-1] = f"no sample at {t:g} s in any trial of `test`"
             y_test = _common.values(test["environment"])[test_idx]
-            x_test = np.asarray(_common.activity(test).isel(time=test_idx).values,
+            # an environment the decoder never saw cannot be named: not scored
+            known = np.isin(y_test, model[-1].classes_)
+            x_test = np.asarray(_common.activity(test).isel(time=test_idx[known]).values,
                                 np.float64)
-            acc.append(_accuracy(model, x_test, y_test))
+            acc.append(_accuracy(model, x_test, y_test[known]))
             train_acc.append(_accuracy(model, x_at, env[at_idx]))
-            scored.append(len(test_idx))
+            scored.append(int(known.sum()))
+            unseen.append(int((~known).sum()))
             continue
         from sklearn.model_selection import KFold
 
-        hits, n, train_hits, train_n = 0, 0, 0, 0
+        hits, n, train_hits, train_n, n_unseen = 0, 0, 0, 0, 0
         # folds of whole trials, shuffled: trials are often stored by environment
         folds = KFold(n_splits=n_folds, shuffle=True, random_state=0)
         for _, held_trials in folds.split(trial_ids):
@@ -237,13 +244,19 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
             if len(np.unique(env[fit_idx][fit_mask])) < 2:
                 continue
             model = _fit(x_fit[fit_mask], env[fit_idx][fit_mask], c, CFG.max_iter)
-            hits += int(np.sum(model.predict(x_at[at_held]) == env[at_idx][at_held]))
-            n += int(at_held.sum())
+            # a held-out trial in an environment no training trial of its fold visits
+            # (an arena of one trial) cannot be named: not scored
+            known = np.isin(env[at_idx], model[-1].classes_)
+            scorable = at_held & known
+            hits += int(np.sum(model.predict(x_at[scorable]) == env[at_idx][scorable]))
+            n += int(scorable.sum())
+            n_unseen += int((at_held & ~known).sum())
             train_hits += int(np.sum(model.predict(x_at[~at_held]) == env[at_idx][~at_held]))
             train_n += int((~at_held).sum())
         acc.append(hits / n if n else np.nan)
         train_acc.append(train_hits / train_n if train_n else np.nan)
         scored.append(n)
+        unseen.append(n_unseen)
     n_env = len(np.unique(env))
     coords = {"trial_time": ("trial_time", np.asarray(times),
                              {"units": "s", "long_name": "time in trial"})}
@@ -254,7 +267,15 @@ def decode_environment(rec, *, test=None, times=None, c=None, window=None, n_fol
                            {"units": "1", "long_name": "decoding accuracy, training trials"}),
         "n_scored": ("trial_time", np.asarray(scored, np.int64),
                      {"units": "1", "long_name": "held-out samples scored"}),
+        "n_unseen": ("trial_time", np.asarray(unseen, np.int64),
+                     {"units": "1", "long_name": "held-out samples not scored: their "
+                                                 "environment is not in the training set"}),
     }, coords=coords)
+    if sum(unseen):
+        _common.warn(f"{max(unseen)} held-out samples at a time are in environments that no "
+                     f"training trial visits (an environment of one trial, or one missing "
+                     f"from `rec`): they cannot be named and are left out of `accuracy` "
+                     f"(`n_unseen`); chance is still 1 / {len(np.unique(env))} environments")
     out.attrs = _common.provenance(
         "decode_environment", rec, c=c, window=window, chance=1.0 / n_env,
         n_environments=n_env,

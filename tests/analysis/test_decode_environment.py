@@ -62,3 +62,25 @@ def test_times_beyond_the_trials_are_nan_and_bad_input_is_named():
         hp.decode_environment(rec, test=rec.isel(unit=slice(0, 3)))
     with pytest.raises(ValueError, match="environment"):
         hp.decode_environment(rec.drop_vars("environment"))
+
+
+def test_an_environment_of_one_trial_is_left_out_of_the_score():
+    """Its trial, held out, leaves no training trial of its environment: it cannot be
+    named, so it is not counted as a miss (it was, with chance still 1 / environments)."""
+    rec = _recording(signal=3.0)
+    env = rec.environment.values.copy()
+    env[rec.trial.values == 7] = 9                  # trial 7 alone in environment 9
+    rec = rec.assign_coords(environment=("time", env))
+    with pytest.warns(hp.AnalysisWarning, match="cannot be named and are left out"):
+        res = hp.decode_environment(rec, times=[5.0])
+    assert int(res.n_unseen[0]) == 1 and int(res.n_scored[0]) == 59
+    assert float(res.accuracy[0]) == 1.0            # every trial that can be named is
+    # a separate test recording holding an environment the decoder never saw
+    env[rec.trial.values == 45] = 9
+    rec = rec.assign_coords(environment=("time", env))
+    train = rec.isel(time=(rec.trial.values < 40) & (rec.trial.values != 7))
+    test = rec.isel(time=rec.trial.values >= 40)
+    with pytest.warns(hp.AnalysisWarning, match="left out of `accuracy`"):
+        res = hp.decode_environment(train, test=test, times=[5.0])
+    assert (int(res.n_unseen[0]), int(res.n_scored[0])) == (1, 19)
+    assert float(res.accuracy[0]) == 1.0

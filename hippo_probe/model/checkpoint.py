@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import hashlib
 import pickle
+import warnings
 from pathlib import Path
 
 import torch
@@ -68,14 +69,18 @@ def load(path) -> dict:
     if not path.is_file():
         raise CheckpointError(f"`checkpoint` must be an existing file; got {str(path)!r}")
     try:
-        with torch.serialization.safe_globals(_safe_globals()):
+        with torch.serialization.safe_globals(_safe_globals()), warnings.catch_warnings():
+            # a pickle of another protocol is refused below, not warned about first
+            warnings.filterwarnings("ignore", message="Detected pickle protocol")
             obj = torch.load(path, map_location="cpu", weights_only=True)
     except pickle.UnpicklingError as err:
-        if "GLOBAL" not in str(err):           # not a refused object: a corrupt file
+        if "GLOBAL" not in str(err) and "Weights only load failed" not in str(err):
+            # not refused by the safe loader: a corrupt file
             raise CheckpointError(f"`checkpoint` {str(path)!r} is not a readable torch "
                                   f"checkpoint ({_first_line(err)})") from None
         raise CheckpointError(
             f"`checkpoint` {str(path)!r} holds objects other than tensors and plain values "
+            f"(or pickle instructions torch does not write) "
             f"and was refused without running anything in it ({_first_line(err)}); load "
             f"only networks and checkpoints written by hippo_probe") from None
     except Exception as err:  # torch raises many types for a corrupt file
@@ -126,7 +131,9 @@ def _safe_globals() -> list:
 
 
 def _first_line(err) -> str:
-    """The line of torch's weights-only error that names the refused global."""
-    lines = [line.strip() for line in str(err).splitlines()]
-    named = [line for line in lines if "Unsupported global" in line or "GLOBAL" in line]
-    return (named or lines or [type(err).__name__])[0][:200]
+    """The line of torch's weights-only error that says what was refused (a global, an
+    opcode), not its advice to load the file unsafely."""
+    lines = [line.strip() for line in str(err).splitlines() if line.strip()]
+    named = [line for line in lines if "Unsupported global" in line or "GLOBAL" in line
+             or line.startswith("Unsupported operand")]
+    return (named or lines[:1] or [type(err).__name__])[0][:200]

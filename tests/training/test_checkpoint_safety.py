@@ -37,6 +37,26 @@ def test_a_crafted_checkpoint_is_refused_and_its_payload_never_runs(crafted):
     assert not marker.exists()
 
 
+@pytest.mark.parametrize("protocol", [2, 4, 5])
+def test_a_plain_pickle_is_refused_without_the_advice_to_load_it_unsafely(tmp_path,
+                                                                          protocol):
+    """A pickle of another protocol than torch's (not a torch file at all) is refused as
+    one with code is, naming what was refused, and never repeats torch's advice to set
+    weights_only=False; torch's warning about the protocol does not leak."""
+    import pickle
+    import warnings
+
+    marker, path = tmp_path / "pwned", tmp_path / "plain.pt"
+    with open(path, "wb") as f:
+        pickle.dump({"model": _Payload(marker), "model_config": 1}, f, protocol=protocol)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(CheckpointError, match="refused without running anything") as err:
+            load(path)
+    assert "weights_only" not in str(err.value)
+    assert not marker.exists()
+
+
 TRAIN = ["train", "--task", "localization", "--world", "compass", "--steps", "1",
          "--validation-trials", "2", "--no-progress"]
 

@@ -121,6 +121,8 @@ def add_commands(sub):
 def _train(a):
     import json
 
+    check_output("--out", a.out, kind="folder")     # a run folder, not a file: refused now
+
     if "torch" not in sys.modules:
         # OpenMP workers that torch starts before `set_num_threads` takes effect keep
         # spin-waiting at barriers; with two or three runs sharing the cores that made every

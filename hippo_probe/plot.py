@@ -526,6 +526,13 @@ def remapping_cdf(sim, *, ax=None):
     return cumulative(groups, xlabel=_label(s), title="remapping", styles=styles, ax=ax)
 
 
+#: Legend labels of the position estimates a recording may hold (``record``'s
+#: ``estimate`` and the baselines'): what :func:`error_curves` writes by default.
+ESTIMATE_LABELS = {"estimate": "network", "estimate_pf": "particle filter (oracle)",
+                   "estimate_sh": "single hypothesis", "estimate_pi": "path integration",
+                   "estimate_nb": "naive Bayes", "estimate_pfslam": "PF-SLAM"}
+
+
 def error_curves(err, *, variables=("euclidean", "radial", "angular"), colors=None,
                  labels=None, degrees=False, fig=None, axes=None):
     """Localization error vs time in trial (mean +- s.e.m. over trials), one panel per
@@ -539,7 +546,7 @@ def error_curves(err, *, variables=("euclidean", "radial", "angular"), colors=No
         Kinds of error, one panel each.
     colors, labels : dict, optional
         Colour and legend label of each estimate, by its name (e.g. ``"estimate_pf"``);
-        default matplotlib's cycle and the names.
+        default matplotlib's cycle and :data:`ESTIMATE_LABELS` (else the names).
     degrees : bool
         Angular error in degrees instead of radians.
     fig, axes
@@ -552,7 +559,7 @@ def error_curves(err, *, variables=("euclidean", "radial", "angular"), colors=No
     variables = [v for v in variables if v in err]
     fig, axes = _panels(len(variables), max_cols=len(variables), panel=2.8, fig=fig,
                         axes=axes, what="kind of error")
-    colors, labels = colors or {}, labels or {}
+    colors, labels = colors or {}, {**ESTIMATE_LABELS, **(labels or {})}
     t = err["trial_time"].values
     for ax, name in zip(axes, variables):
         da = err[name]

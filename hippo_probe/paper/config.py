@@ -32,6 +32,7 @@ import numpy as np
 
 import hippo_probe as hp
 from hippo_probe._atomic import atomic_path, exclusive_lock, save_figure, write_text
+from hippo_probe.plot import ESTIMATE_LABELS
 from hippo_probe.tasks import make_trials, task_config
 
 from ._repository import PACKAGE, REPOSITORY, repository_file  # noqa: F401
@@ -383,9 +384,7 @@ def _cached_npz(path: Path, key: str, make) -> dict:
 COLORS = {"network": "k", "estimate": "k", "estimate_pf": "tab:blue",
           "estimate_sh": "tab:orange", "estimate_pi": "tab:red", "estimate_nb": "tab:green",
           "estimate_pfslam": "tab:purple"}
-LABELS = {"estimate": "network", "estimate_pf": "particle filter (oracle)",
-          "estimate_sh": "single hypothesis", "estimate_pi": "path integration",
-          "estimate_nb": "naive Bayes", "estimate_pfslam": "PF-SLAM"}
+LABELS = ESTIMATE_LABELS
 
 
 def jsonable(obj):

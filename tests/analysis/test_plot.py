@@ -98,6 +98,11 @@ def test_error_curves_and_unknown_results(place):
     assert [ax.get_ylabel() for ax in fig.axes] == [
         "Euclidean error (m)", "radial error (m)", "angular error (rad)"]
     assert fig.axes[0].get_xlabel() == "time in trial (s)"
+    rec["estimate_pf"] = rec.position - 0.02
+    rec["estimate_pf"].attrs = {"units": "m", "long_name": "particle filter estimate"}
+    fig = hp.localization_error(rec, ["estimate", "estimate_pf"]).hp.plot()
+    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert legend[:2] == ["network", "particle filter (oracle)"]
     with pytest.raises(ValueError, match="no hippo_probe plot"):
         place.activity.hp.plot()
 

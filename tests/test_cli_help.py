@@ -120,8 +120,8 @@ def test_baselines_refuses_an_existing_out_before_making_any_trial(tmp_path, cap
     (["import-nwb", "session.nwb", "FOLDER"], "DEST {folder} already exists; pass --overwrite"),
     (["figures", "--out", "FILE"], "--out {file} is a file; give a folder"),
     (["main", "--out", "FILE"], "--out {file} is a file; give a folder"),
-    (["train", "--task", "localization", "--out", "FILE"], "--out {file} is a file; give a "
-                                                           "folder"),
+    (["train", "--task", "localization", "--out", "FILE"],
+     "--out {file} is a file; give a folder"),
     (["world-stats", "--json", "FILE"],
      "--json {file} exists and is not a json file (.json) this command writes; pass "
      "--overwrite"),

@@ -74,8 +74,8 @@ def load(path) -> dict:
             warnings.filterwarnings("ignore", message="Detected pickle protocol")
             obj = torch.load(path, map_location="cpu", weights_only=True)
     except pickle.UnpicklingError as err:
-        if "GLOBAL" not in str(err) and "Weights only load failed" not in str(err):
-            # not refused by the safe loader: a corrupt file
+        if "GLOBAL" not in str(err) and not _plain_pickle(path):
+            # not an object or a pickle refused by the safe loader: a corrupt file
             raise CheckpointError(f"`checkpoint` {str(path)!r} is not a readable torch "
                                   f"checkpoint ({_first_line(err)})") from None
         raise CheckpointError(
@@ -128,6 +128,14 @@ def _safe_globals() -> list:
     from .config import ModelConfig
 
     return [ModelConfig, TorchVersion]
+
+
+def _plain_pickle(path) -> bool:
+    """Whether ``path`` starts as a pickle of protocol 2 or later does (its PROTO
+    opcode), rather than as a torch zip file or bytes of no format."""
+    with open(path, "rb") as f:
+        head = f.read(2)
+    return len(head) == 2 and head[0] == 0x80 and 2 <= head[1] <= 5
 
 
 def _first_line(err) -> str:

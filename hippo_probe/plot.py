@@ -157,15 +157,14 @@ def _field_labels(fields, maps, label):
     return labels.sel(unit=maps["unit"].values)
 
 
-def _group_caption(da, keep, group) -> str:
-    """The title's note of the group :func:`_pick_group` shows, and how many there are
-    (a grid shows one environment or trial of several)."""
-    extra = [d for d in da.dims if d not in keep]
-    if not extra:
+def _group_caption(da, dim, label) -> str:
+    """The title's note of the group ``label`` of ``da``'s ``dim`` that
+    :func:`_pick_group` chose, and how many there are (a grid shows one environment or
+    trial of several)."""
+    if dim is None:
         return ""
-    labels = list(da[extra[0]].values)
-    label = labels[0] if group is None else group
-    caption = f" \N{EM DASH} {extra[0]} {label}"
+    labels = list(da[dim].values)
+    caption = f" \N{EM DASH} {dim} {label}"
     if len(labels) > 1 and label in labels:
         caption += f" ({labels.index(label) + 1} of {len(labels)}; `group=` shows another)"
     return caption
@@ -287,8 +286,9 @@ def ratemap_grid(maps, *, units=None, group=None, max_cols=8, cmap="viridis", pa
     from ._validators import check_option
 
     check_option("scale", scale, ("unit", "shared"))
-    caption = _group_caption(maps, ("unit", "y", "x"), group)
-    maps, group_dim, label = _pick_group(maps, ("unit", "y", "x"), group)
+    picked, group_dim, label = _pick_group(maps, ("unit", "y", "x"), group)
+    caption = _group_caption(maps, group_dim, label)   # of every group, before picking
+    maps = picked
     maps = _units(maps, units, 64).transpose("unit", "y", "x")
     regions = None if fields is None else _field_labels(fields, maps, label)
     fig, axes = _panels(maps.sizes["unit"], max_cols=max_cols, panel=panel, fig=fig,
@@ -356,8 +356,9 @@ def autocorrelation_grid(acorr, *, units=None, group=None, max_cols=8, cmap="RdB
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
 
-    caption = _group_caption(acorr, ("unit", "lag_y", "lag_x"), group)
-    acorr, _, _ = _pick_group(acorr, ("unit", "lag_y", "lag_x"), group)
+    picked, group_dim, label = _pick_group(acorr, ("unit", "lag_y", "lag_x"), group)
+    caption = _group_caption(acorr, group_dim, label)   # of every group, before picking
+    acorr = picked
     acorr = _units(acorr, units, 64).transpose("unit", "lag_y", "lag_x")
     seen = np.isfinite(acorr.values).any(0)
     if seen.any():  # crop to the lags defined somewhere (an odd-shaped arena leaves few)
@@ -411,8 +412,9 @@ def hd_polar(tuning, *, units=None, group=None, max_cols=6, panel=1.8, fig=None,
     stats = tuning if isinstance(tuning, xr.Dataset) and "mean_vector_length" in tuning \
         else None
     curves = tuning["tuning_curve"] if isinstance(tuning, xr.Dataset) else tuning
-    caption = _group_caption(curves, ("unit", "direction"), group)
-    curves, group_dim, label = _pick_group(curves, ("unit", "direction"), group)
+    picked, group_dim, label = _pick_group(curves, ("unit", "direction"), group)
+    caption = _group_caption(curves, group_dim, label)   # of every group, before picking
+    curves = picked
     curves = _units(curves, units, 48).transpose("unit", "direction")
     offset = None
     if stats is not None:

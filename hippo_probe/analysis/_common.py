@@ -237,6 +237,14 @@ def circular_shifts(n: int, dt: float, n_shuffles: int, seed: int | None) -> np.
     return rng.integers(max(low, 1), n - max(low, 1) + 1, size=n_shuffles)
 
 
+def default_shuffles(n_shuffles, by, default: int) -> int:
+    """``n_shuffles`` as given, else ``default`` shuffles, or none with ``by`` (refused
+    there by :func:`shifts_for`)."""
+    if n_shuffles is not None:
+        return n_shuffles
+    return 0 if by is not None else default
+
+
 def shifts_for(rec, n_shuffles, seed, by=None):
     """``[0, s_1, ..., s_n]``: no shift (the observed score), then the random shifts of
     :func:`circular_shifts`.

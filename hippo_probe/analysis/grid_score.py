@@ -529,9 +529,7 @@ def grid_score(rec_or_maps, *, n_shuffles=None, seed=None, percentile=None, thre
     else:
         rec = _common.check_recording(rec_or_maps, ["activity", "position"],
                                       why="grid score")
-        # by default no shuffles with `by`: they would mix the groups (shifts_for)
-        n_shuffles = (0 if by is not None else CELL_CLASS.n_shuffles) \
-            if n_shuffles is None else n_shuffles
+        n_shuffles = _common.default_shuffles(n_shuffles, by, CELL_CLASS.n_shuffles)
         stack = MapStack(rec, n_shuffles=n_shuffles, seed=seed, bin_size=bin_size,
                          sigma=GRID.sigma if sigma is None else sigma, min_speed=min_speed,
                          by=by, extent=extent)

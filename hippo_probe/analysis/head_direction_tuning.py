@@ -160,9 +160,7 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     n_bins = check_number("n_bins", HEAD_DIRECTION.n_bins if n_bins is None else n_bins,
                           low=2, low_inclusive=True, integer=True)
     sigma = check_number("sigma", sigma, low=0, low_inclusive=True)
-    # by default no shuffles with `by`: they would mix the groups (shifts_for)
-    n_shuffles = (0 if by is not None else HEAD_DIRECTION.n_shuffles) \
-        if n_shuffles is None else n_shuffles
+    n_shuffles = _common.default_shuffles(n_shuffles, by, HEAD_DIRECTION.n_shuffles)
     dt = _common.sample_dt(rec)
     bins = direction_bins(_common.values(rec["head_direction"]), n_bins)
     n_dir_nan = int((bins < 0).sum())

@@ -78,20 +78,19 @@ def base_files(readout_path, name: str, seed: int) -> list[Path]:
     return [p for p in dict.fromkeys(places) if p.is_file()]
 
 
-def network_parameters(obj: dict, path) -> dict:
+def network_parameters(obj: dict, path, base: dict | None = None) -> dict:
     """The parameters a loaded network file ``obj`` (read from ``path``) stands for: its
     best ones if it has both, and for a readout file (:data:`READOUT_OF`) its network's
-    with the readout's classifier."""
+    (``base``, if already loaded by :func:`readout_base`) with the readout's classifier."""
     if READOUT_OF in obj:
-        return _readout_parameters(obj, path)
+        return _readout_parameters(obj, path, base or readout_base(obj, path))
     return obj.get("best_model") or obj["model"]
 
 
-def _readout_parameters(obj: dict, path) -> dict:
+def _readout_parameters(obj: dict, path, base: dict) -> dict:
     """A readout file's parameters: its base network's, with the readout's classifier."""
     from ..errors import CheckpointError
 
-    base = _readout_base(obj, path)
     head = obj["model"]
     if set(head) != {"classifier.weight", "classifier.bias"}:
         raise CheckpointError(f"`checkpoint` {str(path)!r} is a readout and must hold only "
@@ -99,17 +98,18 @@ def _readout_parameters(obj: dict, path) -> dict:
     return {**(base.get("best_model") or base["model"]), **head}
 
 
-def position_task(obj: dict, path) -> str | None:
+def position_task(obj: dict, path, base: dict | None = None) -> str | None:
     """The task whose frame a loaded network file's (x, y) readout speaks: the task it
     was trained on, or, where its training fitted the arena readout alone
     (``train_only = "classifier"``: a readout of a frozen network), its base network's
     (the generalized network's start-relative frame, though the readout was fitted on the
-    specialized task). None where that base cannot be found."""
+    specialized task; ``base``: a readout file's network, if already loaded). None where
+    that base cannot be found."""
     cfg = obj.get("config") or {}
     if not (isinstance(cfg, dict) and cfg.get("train_only") == "classifier"):
         return obj.get("task")
     if READOUT_OF in obj:
-        return position_task(_readout_base(obj, path), path)
+        return position_task(base or readout_base(obj, path), path)
     # a readout trained by gradient steps holds all its parameters: its base by name
     from ..pretrained import NAMES, resolve_network_file
     from .checkpoint import load
@@ -121,7 +121,7 @@ def position_task(obj: dict, path) -> str | None:
     return None
 
 
-def _readout_base(obj: dict, path) -> dict:
+def readout_base(obj: dict, path) -> dict:
     """The loaded network file a readout file reads (by name, seed and parameters'
     digest: beside it, then among the shipped networks)."""
     from ..errors import CheckpointError
@@ -236,7 +236,9 @@ def load_pretrained(name: str, seed: int | None = None):
     try:
         if isinstance(config, dict):
             config = ModelConfig(**{**config, "input_scale": tuple(config["input_scale"])})
-        state = network_parameters(obj, path)
+        # a readout's network, read once for its parameters and its frame
+        base = readout_base(obj, path) if READOUT_OF in obj else None
+        state = network_parameters(obj, path, base)
         _check_declared_shapes(config, state, path)
         net = Navigator(dataclasses.replace(config, precision="fp32"))
     except CheckpointError:
@@ -246,7 +248,7 @@ def load_pretrained(name: str, seed: int | None = None):
                               f"version cannot build ({type(err).__name__}: {err})") from None
     load_into(net, state, path)
     net.task = obj.get("task")
-    net.position_task = position_task(obj, path)
+    net.position_task = position_task(obj, path, base)
     net.world = checkpoint_world(obj)
     net.info = {k: obj.get(k) for k in ("task", "config", "class_weight", "test",
                                         "steps_done", "finished", "base_network",

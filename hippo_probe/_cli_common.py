@@ -2,15 +2,41 @@
 option's default shown in ``--help``, usage errors in one line), :func:`one_of` (an option
 restricted to a few names, refused with the package's validator message), :func:`count`
 and :func:`check_output` (an output path refused before the work starts, naming the
-flag). The subcommands' ``_cli`` modules import these; :mod:`hippo_probe.cli` imports the
-``_cli`` modules, so every arrow runs one way.
+flag), and :func:`plain_warnings`. The subcommands' ``_cli`` modules import these;
+:mod:`hippo_probe.cli` imports the ``_cli`` modules, so every arrow runs one way.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import warnings
 from pathlib import Path
+
+#: The package's folder: a warning raised from a file below it is the toolkit's own.
+PACKAGE = Path(__file__).resolve().parent
+
+
+@contextlib.contextmanager
+def plain_warnings(command: str):
+    """Print the toolkit's warnings as ``hippo-probe COMMAND: warning: ...``, one line
+    like its errors, rather than as Python shows them (a file, a line number and a line of
+    source inside the package, which mean nothing to a user of the command). Warnings of
+    other libraries keep Python's form. Only the text is changed: whoever records warnings
+    (``pytest.warns``, ``catch_warnings(record=True)``) still receives them all."""
+    original = warnings.formatwarning
+
+    def one_line(message, category, filename, lineno, line=None):
+        if Path(filename).resolve().is_relative_to(PACKAGE):
+            return f"hippo-probe {command}: warning: {message}\n"
+        return original(message, category, filename, lineno, line)
+
+    warnings.formatwarning = one_line
+    try:
+        yield
+    finally:
+        warnings.formatwarning = original
 
 
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -80,7 +106,7 @@ OUTPUT_SUFFIXES = {"figure": (".png", ".pdf", ".svg"), "json": (".json",)}
 
 
 def check_output(flag: str, path, *, kind: str = "store", overwrite: bool = False,
-                 writes: str = "figure") -> Path:
+                 writes: str = "figure", example: str | None = None) -> Path:
     """Refuse, before any work starts, an output path the command could not write at its
     end; the message names the command-line ``flag``.
 
@@ -99,6 +125,9 @@ def check_output(flag: str, path, *, kind: str = "store", overwrite: bool = Fals
         The command's --overwrite.
     writes : {"figure", "json"}
         What a ``"file"`` output is (:data:`OUTPUT_SUFFIXES`).
+    example : str, optional
+        The file name suggested when a ``"file"`` output is given as a folder (default
+        ``figure.png`` or ``numbers.json``, after ``writes``).
 
     Returns
     -------
@@ -112,8 +141,9 @@ def check_output(flag: str, path, *, kind: str = "store", overwrite: bool = Fals
     if kind == "store" and (path.exists() or path.is_symlink()) and not overwrite:
         raise FileExistsError(f"{flag} {path} already exists; pass --overwrite to replace it")
     if kind == "file" and path.is_dir():
+        example = example or ("numbers.json" if writes == "json" else "figure.png")
         raise IsADirectoryError(f"{flag} {path} is a folder; give a file name (e.g. "
-                                f"{path / 'errors.png'})")
+                                f"{path / example})")
     if kind == "file" and path.is_file() and not overwrite \
             and path.suffix.lower() not in OUTPUT_SUFFIXES[writes]:
         raise FileExistsError(f"{flag} {path} exists and is not a {writes} file "

@@ -16,7 +16,7 @@ from __future__ import annotations
 import sys
 
 from . import _main
-from ._cli_common import Parser
+from ._cli_common import Parser, plain_warnings
 from .baselines import _cli as baselines_cli
 from .model import _cli as model_cli
 from .recording import _cli as recording_cli
@@ -49,7 +49,8 @@ def main(argv=None) -> int:
     except SystemExit as done:   # --help, --version, or a usage error (already one line)
         return int(done.code or 0)
     try:
-        return int(args.run(args) or 0)
+        with plain_warnings(args.command):
+            return int(args.run(args) or 0)
     except (ValueError, FileNotFoundError, FileExistsError, IsADirectoryError,
             NotADirectoryError, PermissionError) as err:
         # bad input: one clear line, no traceback

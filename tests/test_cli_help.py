@@ -9,6 +9,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import warnings
 
 import pytest
 
@@ -114,7 +115,11 @@ def test_baselines_refuses_an_existing_out_before_making_any_trial(tmp_path, cap
 
 @pytest.mark.parametrize("argv, words", [
     (["baselines", "--task", "localization", "--out", "NEW", "--plot", "FOLDER"],
-     "--plot {folder} is a folder"),
+     "--plot {folder} is a folder; give a file name (e.g. {folder}/errors.png)"),
+    (["world-stats", "--plot", "FOLDER"],
+     "--plot {folder} is a folder; give a file name (e.g. {folder}/example_trials.png)"),
+    (["world-stats", "--json", "FOLDER"],
+     "--json {folder} is a folder; give a file name (e.g. {folder}/numbers.json)"),
     (["baselines", "--task", "localization", "--out", "FILE/b.zarr"],
      "--out {file}/b.zarr: {file} is a file, not a folder"),
     (["import-nwb", "session.nwb", "FOLDER"], "DEST {folder} already exists; pass --overwrite"),
@@ -203,3 +208,38 @@ def test_evaluate_shows_progress_and_prints_the_same_numbers(two_trials, capsys)
     shown = capsys.readouterr()
     assert "evaluate localization" in shown.err and "2/2" in shown.err
     assert json.loads(shown.out) == json.loads(quiet.out)
+
+
+def test_the_toolkit_s_warnings_print_as_one_line_naming_the_command(tmp_path):
+    from hippo_probe._cli_common import PACKAGE, plain_warnings
+
+    ours = str(PACKAGE / "model" / "_cli.py")
+    with plain_warnings("record"):
+        assert warnings.formatwarning("arenas differ", UserWarning, ours, 58) == \
+            "hippo-probe record: warning: arenas differ\n"
+        # another library's warning keeps Python's form (its file and line)
+        assert warnings.formatwarning("old", FutureWarning, "/lib/other.py", 3).startswith(
+            "/lib/other.py:3: FutureWarning: old")
+        with pytest.warns(UserWarning, match="still recorded"):   # recording is untouched
+            warnings.warn_explicit("still recorded", UserWarning, ours, 1)
+    assert warnings.formatwarning("x", UserWarning, ours, 58).startswith(ours)   # restored
+
+
+def test_a_command_prints_the_toolkit_s_warnings_as_one_line():
+    """End to end, in a fresh process (pytest records warnings instead of printing them)."""
+    script = textwrap.dedent("""
+        import sys, warnings
+        import hippo_probe.pretrained.summary as summary
+        from hippo_probe.cli import main
+
+        def warn_then_fail(*args, **kwargs):
+            warnings.warn_explicit("a warning of ours", UserWarning, summary.__file__, 1)
+            raise FileNotFoundError("stop here")
+
+        summary.shipped_table = warn_then_fail
+        sys.exit(main(["networks"]))
+    """)
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 2
+    assert done.stderr == ("hippo-probe networks: warning: a warning of ours\n"
+                           "hippo-probe networks: error: stop here\n")

@@ -6,7 +6,8 @@ import json
 import numpy as np
 import pytest
 
-from hippo_probe.pretrained.summary import markdown, seed_spread, shipped_table, training_log
+from hippo_probe.pretrained.summary import (markdown, per_seed_text, seed_spread, shipped_table,
+                                           training_log)
 
 
 def _ship(folder, name, seed, errors, accuracy=None, stopped=None, steps=40000,
@@ -42,6 +43,20 @@ def test_spread_over_seeds(tmp_path):
     assert spread.loc["localization", "error_50s_m"] == "0.200"     # one seed: no range
     text = markdown(spread)
     assert "| localization | darkness | 0 | 0.200 / 0.100 / 0.100 | — |" in text
+
+
+def test_per_seed_rows_print_each_value_to_its_precision_and_a_dash_for_none(tmp_path):
+    _ship(tmp_path, "specialized", 0, (0.0612, 0.05, 0.04), (0.5, 0.7, 0.912))
+    _ship(tmp_path, "localization", 0, (0.2, 0.1, 0.1))
+    log = tmp_path / "localization.log.json"     # as a readout fitted without a budget
+    log.write_text(log.read_text().replace('"steps": 40000', '"steps": null'))
+    lines = per_seed_text(shipped_table(["localization", "specialized"],
+                                        folder=tmp_path)).splitlines()
+    localization, specialized = lines[2].split(), lines[3].split()
+    # seed, world, variant, steps, budget, stopped_early, hours, 3 errors, 3 accuracies
+    assert specialized[1:] == ["0", "darkness", "faithful", "40000", "40000", "False",
+                               "2.0", "0.061", "0.050", "0.040", "0.50", "0.70", "0.91"]
+    assert localization[5] == "—" and localization[-3:] == ["—", "—", "—"]
 
 
 def test_a_variant_is_labelled_a_departure_and_the_study_s_network_is_not(tmp_path):

@@ -44,7 +44,8 @@ def _baselines(args):
     # refuse the outputs before making a single trial (the run takes minutes)
     out = check_output("--out", args.out, overwrite=args.overwrite)
     if args.plot:
-        check_output("--plot", args.plot, kind="file", overwrite=args.overwrite)
+        check_output("--plot", args.plot, kind="file", overwrite=args.overwrite,
+                     example="errors.png")
 
     import time
 

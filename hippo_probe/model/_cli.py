@@ -62,11 +62,10 @@ def _record(a):
 
 
 def _networks(a):
-    from ..pretrained.summary import markdown, seed_spread, shipped_table
+    from ..pretrained.summary import markdown, per_seed_text, seed_spread, shipped_table
 
     table = shipped_table()
     if table.empty:
         raise FileNotFoundError("no shipped networks in this installation "
                                 "(hippo_probe/pretrained)")
-    print(table.to_string(float_format="{:.3f}".format) if a.per_seed
-          else markdown(seed_spread(table)))
+    print(per_seed_text(table) if a.per_seed else markdown(seed_spread(table)))

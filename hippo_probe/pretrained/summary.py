@@ -154,6 +154,15 @@ def seed_spread(table):
     return frame
 
 
+def per_seed_text(table) -> str:
+    """:func:`shipped_table` as aligned text: errors in m to the mm, accuracies to two
+    digits, hours to one, and "—" where a network has no such value (no arena readout,
+    or a readout fitted without a step budget)."""
+    formats = {m: ("{:.3f}" if m.startswith("error") else "{:.2f}").format for m in METRICS}
+    formats.update(hours="{:.1f}".format, budget="{:.0f}".format)
+    return table.to_string(formatters=formats, na_rep="—")
+
+
 def markdown(spread) -> str:
     """:func:`seed_spread` as a Markdown table (errors in m, at 50 / 100 / 200 s)."""
     head = ["network", "world", "seeds", "error 50 / 100 / 200 s (m)",

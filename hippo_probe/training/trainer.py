@@ -574,7 +574,10 @@ def _resume(ckpt_path, config, net, opt):
                                      "best_model", "log"), ckpt_path, "resume training")
     diff = TrainConfig.from_dict(ckpt["config"]).differences(config)
     if diff:
-        listed = "; ".join(f"{k}: checkpoint {a!r}, got {b!r}" for k, a, b in
+        def shown(value):                  # None is an option left at its default
+            return "not set" if value is None else repr(value)
+
+        listed = "; ".join(f"{k}: checkpoint {shown(a)}, got {shown(b)}" for k, a, b in
                            ((k, *v) for k, v in diff.items()))
         raise ValueError(f"`run_dir` {str(ckpt_path.parent)!r} holds a checkpoint of another "
                          f"configuration ({listed}); use a new directory")

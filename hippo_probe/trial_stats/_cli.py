@@ -29,7 +29,8 @@ def _world_stats(args):
         check_output("--json", args.json, kind="file", writes="json",
                      overwrite=args.overwrite)
     if args.plot:
-        check_output("--plot", args.plot, kind="file", overwrite=args.overwrite)
+        check_output("--plot", args.plot, kind="file", overwrite=args.overwrite,
+                     example="example_trials.png")
 
     stats = world_stats(n_trials=args.trials, split=args.split, seed=args.seed,
                         world=args.world)

@@ -263,6 +263,10 @@ def test_resume_refuses_another_configuration(uninterrupted):
     with pytest.raises(ValueError, match=r"another configuration \(lr: checkpoint 0.001"):
         fit(TrainConfig(**dict(TINY, lr=0.5)), d / "run", cache_dir=d / "cache",
             progress=False)
+    # an option left at its default (None) reads as such, not as Python's None
+    with pytest.raises(ValueError, match=r"class_weight: checkpoint not set, got 2\.0\)"):
+        fit(TrainConfig(**dict(TINY, class_weight=2.0)), d / "run", cache_dir=d / "cache",
+            progress=False)
 
 
 def test_training_moves_the_parameters(uninterrupted):

@@ -6,8 +6,13 @@ import json
 import numpy as np
 import pytest
 
-from hippo_probe.pretrained.summary import (markdown, per_seed_text, seed_spread, shipped_table,
-                                           training_log)
+from hippo_probe.pretrained.summary import (
+    markdown,
+    per_seed_text,
+    seed_spread,
+    shipped_table,
+    training_log,
+)
 
 
 def _ship(folder, name, seed, errors, accuracy=None, stopped=None, steps=40000,

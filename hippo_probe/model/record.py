@@ -9,6 +9,7 @@ classifier's weights, the arena geometry, and optionally the baselines' estimate
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -70,6 +71,13 @@ def _in_arenas(batch, verts) -> bool:
         bool(np.allclose(trial_verts, verts[ids], equal_nan=True))
 
 
+def _is_shipped(file) -> bool:
+    """Whether ``file`` is one of the networks shipped with the package."""
+    from ..pretrained import HERE
+
+    return Path(file).resolve().parent == HERE.resolve()
+
+
 @torch.no_grad()
 def _run_network(network, batch, chunk: int = 250, *, progress: bool = False):
     """The network on a TrialBatch, in the recording's layout: (h (B*T, H) float32,
@@ -124,7 +132,8 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
         Arrays (T, B, ...) in the arena frame to add, named as in
         :data:`BASELINE_VARIABLES` (e.g. ``{"estimate_pf": ..., "pf_cov": ...}``).
     session_id, checkpoint : str, optional
-        Dataset attrs (defaults: ``"<task>-<split>-seed<seed>"`` and the network's file).
+        Dataset attrs (defaults: ``"<task>-<split>-seed<seed>"`` and the network's file:
+        its path, or its name alone for a shipped network, e.g. ``"generalized.pt"``).
     config : TaskConfig, optional
         Must be the batch's own configuration (``batch.config``, the default) if given.
     chunk : int
@@ -172,6 +181,8 @@ def record(network, batch, *, baselines: dict | None = None, session_id: str | N
     else:
         estimate = xy
     net_file = (getattr(network, "info", None) or {}).get("file")
+    if net_file and _is_shipped(net_file):
+        net_file = Path(net_file).name  # the same on every machine, as the study's recordings
     rec = trial_layout(
         T, B, batch.dt, trial_id=batch.trial_index, environment=batch.environment,
         start_position=batch.start, task=batch.task, split=batch.split,

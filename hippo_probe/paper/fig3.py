@@ -117,10 +117,12 @@ def make(cfg, out):
         a.legend(frameon=False, fontsize=7)
     # below the PF-SLAM curves' plateau, above the 100-particle line
     ax[4].legend(frameon=False, fontsize=7, loc="lower right", bbox_to_anchor=(1, 0.2))
-    # accuracy curves rise early and stay high: the middle right is below them and above
-    # chance and the retrained readout
-    for a in (ax[2], ax[5]):
-        a.legend(frameon=False, fontsize=7, loc="center right")
+    # the accuracy curve rises early and stays high: the middle right is below it and
+    # above chance
+    ax[2].legend(frameon=False, fontsize=7, loc="center right")
+    # the retrained readout lies anywhere from chance to the specialized network's curve
+    # (0.04 to 0.42 at 200 s over the shipped runs): matplotlib finds the emptiest place
+    ax[5].legend(frameon=False, fontsize=7, loc="best")
     ax[3].set_ylim(bottom=0)
     fig.suptitle(f"Fig. 3 — {gen.sizes['trial_id']} test trials per panel (A-C, F)")
     C.save(fig, "fig3", numbers, cfg, out)

@@ -23,6 +23,7 @@ from . import config as C
 N_EXAMPLES = 4
 BIN = 0.05          # m: 5 cm bins in the 0.33 m arenas
 SIGMA = 1.0         # bins
+HD_UNITS_SHOWN = 10  # the most tuned units' polar plots, in two rows of five
 
 
 def _three_maps(rec):
@@ -121,10 +122,12 @@ def make(cfg, out):
 
     hd = hp.head_direction_tuning(many, n_bins=60)
     mvl = hd.mean_vector_length.values.ravel()
-    show = np.argsort(-np.nan_to_num(mvl))[:20]
+    # two rows: polar plots large enough to read a weak tuning's shape
+    show = np.argsort(-np.nan_to_num(mvl))[:HD_UNITS_SHOWN]
     hp.plot.hd_polar(hd, units=many.unit.values[show], max_cols=5, fig=top[1])
     # after hd_polar, whose own title this replaces
-    top[1].suptitle("C1  head-direction tuning of the 20 most tuned units (specialized "
+    top[1].suptitle(f"C1  head-direction tuning of the {len(show)} most tuned units "
+                    "(specialized "
                     "network, 60 bins;\nradius from 0 = the unit's minimum, 0° = +x, "
                     "counter-clockwise)", fontsize=10)
     numbers["C_mean_vector_length"] = {

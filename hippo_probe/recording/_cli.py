@@ -23,6 +23,14 @@ def add_commands(sub):
                    type=one_of("position_units", ("m", "cm", "mm")),
                    help="length unit of the file's positions, where the file does not say "
                         "(default: the file's own; metres, with a warning, if it has none)")
+    p.add_argument("--head-direction-units", default=None, choices=["rad", "deg"],
+                   type=one_of("head_direction_units", ("rad", "deg")),
+                   help="angle unit of the file's head direction, where the file does not "
+                        "say or is wrong (default: the file's own; radians, with a warning, "
+                        "if it has none)")
+    p.add_argument("--units", nargs="+", type=int, default=None, metavar="ID",
+                   help="ids of the Units table's units to import (default: all); leave "
+                        "out units observed for only part of the time (obs_intervals)")
     p.add_argument("--no-trials", action="store_true",
                    help="ignore the file's trials table (one trial per epoch)")
     p.add_argument("--overwrite", action="store_true", help="replace DEST if it exists")
@@ -38,7 +46,9 @@ def _import_nwb(args):
         args.head_direction_sign)
     rec = from_nwb(args.nwb, epoch=None if args.epoch == "all" else args.epoch,
                    trials=False if args.no_trials else "auto", floor_axes=args.floor_axes,
-                   head_direction_sign=sign, position_units=args.position_units)
+                   head_direction_sign=sign, position_units=args.position_units,
+                   head_direction_units=args.head_direction_units,
+                   units=args.units)
     save_recording(rec, args.dest, overwrite=args.overwrite)
     print(f"saved {args.dest}: {rec.sizes['time']} samples x {rec.sizes['unit']} units, "
           f"{rec.sizes['trial_id']} trial(s), {float(rec.activity.sum()):.0f} "

@@ -11,6 +11,7 @@ from .._validators import check_finite, check_option, check_real, check_shape
 from ..errors import RecordingError
 from .layout import assemble, trial_blocks
 from .schema import annotate
+from .config import DEFAULTS
 from .validate import _v, check_activity_kind, validate
 
 #: Metres per unit of the position units ``from_arrays`` accepts.
@@ -32,14 +33,17 @@ def check_time(time, name="time"):
     return time
 
 
-def bin_spikes(spike_times, time, trial, trial_start, trial_stop):
-    """Count each unit's spikes on the tracking samples (nearest sample, within trials).
+def bin_spikes(spike_times, time, trial, trial_start, trial_stop, *, reach=None):
+    r"""Count each unit's spikes on the tracking samples (nearest sample, within trials).
 
     Sample ``i`` of a trial covers the part of the trial's interval ``[trial_start,
     trial_stop]`` nearer to ``time[i]`` than to any other sample of the trial: from the
     midpoint with the previous sample (or ``trial_start``) to the midpoint with the next
-    one (or ``trial_stop``, inclusive). Spikes outside every trial are not counted, so the
-    counts add up to the spikes inside the trials' intervals.
+    one (or ``trial_stop``, inclusive), but reaching no further than ``reach`` towards a
+    neighbour. Every analysis takes a sample to stand for one ``dt``, so spikes where the
+    tracking skipped frames or paused inside a trial (no position is known there) must
+    not be piled onto the samples around the gap. Spikes outside every trial are not
+    counted, nor those in a gap, which is warned about.
 
     Parameters
     ----------
@@ -50,6 +54,12 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop):
     trial_start, trial_stop : (n_trials,) arrays
         Interval of each trial, in the order the trials appear in ``time``; intervals
         must not overlap.
+    reach : float, optional
+        How far from its sample (s) a spike may be counted. Default
+        :math:`(1 + j)\,\mathrm{dt} / 2`, with ``dt`` the median sample interval within
+        trials and ``j`` the clock jitter tolerated (``RecordingConfig.gap_jitter``, 10 %):
+        jittered samples leave no hole between them, while a sample beside a gap stands
+        for at most ``(1 + j) dt``.
 
     Returns
     -------
@@ -61,19 +71,34 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop):
     >>> t = np.array([0.0, 1.0, 2.0])
     >>> bin_spikes([[0.4, 0.6, 2.0, 5.0]], t, np.zeros(3, int), [0.0], [2.0]).ravel()
     array([1., 1., 1.], dtype=float32)
+
+    Tracking stopped between 1 s and 4 s: the spikes in the gap are not counted.
+
+    >>> t = np.array([0.0, 1.0, 4.0, 5.0])
+    >>> bin_spikes([[1.2, 2.5, 3.0, 3.9]], t, np.zeros(4, int), [0.0], [5.0]).ravel()
+    array([0., 1., 1., 0.], dtype=float32)
     """
     time = np.asarray(time, dtype=float)
     starts, stops, _ = trial_blocks(trial)
+    if reach is None:
+        within = np.diff(time)[np.asarray(trial)[1:] == np.asarray(trial)[:-1]]
+        reach = (1 + DEFAULTS.gap_jitter) * float(np.median(within)) / 2 if within.size \
+            else np.inf     # one sample a trial: its trial's interval is all it has
     mid = (time[1:] + time[:-1]) / 2
     left = np.empty_like(time)
     right = np.empty_like(time)
-    left[1:], right[:-1] = mid, mid
+    # between two samples of a trial, an edge beyond reach leaves a hole: a gap in the
+    # tracking; a trial's own ends stay its interval's
+    left[1:] = np.maximum(mid, time[1:] - reach)
+    right[:-1] = np.minimum(mid, time[:-1] + reach)
     left[starts] = trial_start
     right[stops - 1] = trial_stop
     is_last = np.zeros(time.size, dtype=bool)
     is_last[stops - 1] = True
     counts = np.zeros((time.size, len(spike_times)), dtype=np.float32)
-    lost = []
+    lost, in_gaps, n_in_trials = [], 0, 0
+    trial_start = np.asarray(trial_start, dtype=float)
+    trial_stop = np.asarray(trial_stop, dtype=float)
     for u, spikes in enumerate(spike_times):
         if np.ndim(spikes) == 0:
             # a flat list of times would make each time a unit of one spike
@@ -87,6 +112,12 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop):
         i, spikes_in = i[inside], spikes[inside]
         inside = (spikes_in < right[i]) | ((spikes_in == right[i]) & is_last[i])
         counts[:, u] = np.bincount(i[inside], minlength=time.size)
+        # spikes inside a trial's interval that no sample took: in a gap of the tracking
+        k = np.searchsorted(trial_start, spikes, side="right") - 1
+        ok = k >= 0
+        n_here = int((spikes[ok] <= trial_stop[k[ok]]).sum())
+        n_in_trials += n_here
+        in_gaps += n_here - int(inside.sum())
         if spikes.size and not inside.any():
             lost.append(u)
     if lost:
@@ -96,7 +127,25 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop):
                       f"index {lost[0]}) falls outside the recording's trials "
                       f"([{time[0]:.6g}, {time[-1]:.6g}] s): are `spike_times` in seconds "
                       f"on the same clock as `time`?", UserWarning, stacklevel=3)
+    elif in_gaps:
+        _warn_gaps(time, trial, reach, in_gaps, n_in_trials)
     return counts
+
+
+def _warn_gaps(time, trial, reach, in_gaps, n_in_trials):
+    """Say how many spikes fell in gaps of the tracking, and where the longest gap is."""
+    step = np.diff(time)
+    same = np.asarray(trial)[1:] == np.asarray(trial)[:-1]
+    gaps = np.flatnonzero(same & (step > 2 * reach))
+    where = ""
+    if gaps.size:
+        g = gaps[np.argmax(step[gaps])]
+        where = (f"; {gaps.size} gaps between samples, the longest {step[g]:.3g} s "
+                 f"after t = {time[g]:.6g} s")
+    warnings.warn(f"{in_gaps} of the {n_in_trials} spikes inside the trials "
+                  f"({in_gaps / n_in_trials:.2%}) fall where the tracking has no sample "
+                  f"within {reach:.3g} s (skipped frames or a pause{where}): they are not "
+                  f"counted, as no position is known there", UserWarning, stacklevel=3)
 
 
 #: Share of a unit's spikes beyond the samples' span above which ``from_arrays`` warns.
@@ -125,16 +174,21 @@ def _warn_spikes_beyond_samples(spike_times, time):
                       UserWarning, stacklevel=3)
 
 
-def _refuse_wrapped_degrees(head_direction, largest) -> None:
-    """Refuse a head direction that wraps at 360 (a jump of more than 180 between
-    consecutive samples, every value within 360 in magnitude): degrees, which would be
-    read as radians. Unwrapped radians change by less than pi a sample and pass."""
+def degrees_wrap(head_direction):
+    """The first sample after which an angle taken as radians wraps at 360 (a jump of more
+    than 180 between consecutive samples, every value within 360 in magnitude): degrees,
+    which would be read as radians. None where it does not: unwrapped radians change by
+    less than pi a sample."""
+    largest = np.nanmax(np.abs(head_direction), initial=0.0)
     if not 2 * np.pi + 1e-9 < largest <= 360 + 1e-9:
-        return
-    step = np.abs(np.diff(head_direction))
-    jumps = np.flatnonzero(step > 180)          # NaN steps compare False
-    if jumps.size:
-        i = int(jumps[0])
+        return None
+    jumps = np.flatnonzero(np.abs(np.diff(head_direction)) > 180)   # NaN steps: False
+    return int(jumps[0]) if jumps.size else None
+
+
+def _refuse_wrapped_degrees(head_direction) -> None:
+    i = degrees_wrap(head_direction)
+    if i is not None:
         raise ValueError(f"`head_direction` must be in radians; it wraps at 360 (from "
                          f"{head_direction[i]:.4g} to {head_direction[i + 1]:.4g} between "
                          f"samples {i} and {i + 1}): degrees? pass np.deg2rad(...)")
@@ -310,8 +364,8 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
         head_direction = check_shape("head_direction", check_real(
             "head_direction", head_direction).astype(float), (n,))
         check_finite("head_direction", head_direction, allow_nan=True)
+        _refuse_wrapped_degrees(head_direction)
         largest = np.nanmax(np.abs(head_direction), initial=0.0)
-        _refuse_wrapped_degrees(head_direction, largest)
         if largest > 2 * np.pi + 1e-9:
             warnings.warn(f"`head_direction` reaches {largest:.4g} in magnitude, more than "
                           f"2 pi: if it is in degrees, pass np.deg2rad(...) "

@@ -20,7 +20,7 @@ from .._atomic import atomic_path
 from .._validators import check_bool, check_option, check_path
 from ..errors import RecordingError
 from .._angles import wrap_angle
-from .arrays import LENGTH_UNITS, bin_spikes, check_time
+from .arrays import LENGTH_UNITS, bin_spikes, check_time, degrees_wrap
 from .config import DEFAULTS
 from .layout import assemble, trial_blocks
 from .schema import annotate
@@ -86,6 +86,14 @@ def _pick(found, name, what, path):
 MAX_POSITION_M = 1e3
 MAX_TIME_S = 1e7
 MAX_ANGLE_RAD = 1e6      # unwrapped angles may hold many turns; not 1e6 radians of them
+#: A tracked floor wider than this (m) is warned about: centimetres stored under pynwb's
+#: default unit "meters" read 100 times too large, and rodent arenas and tracks stay
+#: below it (the largest open fields are ~18 m across).
+LARGE_FLOOR_M = 20.0
+#: Share of all spike times beyond the end of everything the file times (tracking,
+#: epochs, trials) above which the spike times are warned to be on another clock or in
+#: another unit (milliseconds keep a few of the first spikes of a session inside it).
+BEYOND_SESSION_WARNING = 0.5
 
 
 def _check_plausible(name, values, limit, unit, path):
@@ -195,10 +203,43 @@ def _column(entry):
     return values if j is None else values[:, j]
 
 
+def _is_angle(series) -> bool:
+    """Whether a series declares an angle unit (a head direction, not a position)."""
+    return str(series.unit).strip().lower() in NWB_ANGLE_UNITS
+
+
+def _default_floor_axes(axes, columns, location):
+    """The two floor axes when none are named: the two of largest spread (the vertical
+    axis of a floor-bound animal barely moves), both from one series when the container
+    holds 2-D series (two LEDs' x would otherwise pair with each other), never a series
+    in an angle unit."""
+    candidates = [a for a, (series, _) in axes.items() if not _is_angle(series)]
+    wide = list(dict.fromkeys(series.name for series, j in axes.values()
+                              if j is not None and not _is_angle(series)))
+    if len(wide) > 1:
+        first = [a for a in candidates if axes[a][0].name == wide[0]]
+        raise RecordingError(
+            f"the position container {location} holds several 2-D series {wide}: which "
+            f"one is the animal's position is not known; pass floor_axes naming two "
+            f"columns of one, e.g. floor_axes={tuple(first[:2])!r} (`--floor-axes` of "
+            f"`hippo-probe import-nwb`)")
+    if wide:
+        candidates = [a for a in candidates if axes[a][0].name == wide[0]]
+    if len(candidates) < 2:
+        raise RecordingError(f"the position container {location} has fewer than two axes "
+                             f"of length ({list(axes)}; those in an angle unit are head "
+                             f"directions); pass floor_axes")
+    spread = {axis: np.nanstd(columns[axis]) for axis in candidates}
+    return tuple(sorted(sorted(spread, key=spread.get)[-2:], key=list(axes).index))
+
+
 def _read_position(nwb, name, floor_axes, position_units, path):
     _, Position, _, SpatialSeries = _nwb_classes()
-    location, container = _pick(_containers(nwb, Position) + _containers(nwb, SpatialSeries),
-                                name, "Position (SpatialSeries) data", path)
+    found = _containers(nwb, Position) + _containers(nwb, SpatialSeries)
+    if name is None:     # a bare series in an angle unit is a head direction
+        found = [(loc, obj) for loc, obj in found
+                 if not (isinstance(obj, SpatialSeries) and _is_angle(obj))] or found
+    location, container = _pick(found, name, "Position (SpatialSeries) data", path)
     axes = _axes_table({container.name: container} if isinstance(container, SpatialSeries)
                        else container.spatial_series)
     columns = {axis: _column(entry) for axis, entry in axes.items()}
@@ -212,9 +253,8 @@ def _read_position(nwb, name, floor_axes, position_units, path):
         raise RecordingError(f"position axis {empty[0]!r} in {path} ({location}) has no "
                              f"finite value: the file is damaged, or the axis was not "
                              f"tracked{hint}")
-    if floor_axes is None:      # the vertical axis of a floor-bound animal barely moves
-        spread = {axis: np.nanstd(v) for axis, v in columns.items()}
-        floor_axes = tuple(sorted(sorted(spread, key=spread.get)[-2:], key=list(axes).index))
+    if floor_axes is None:
+        floor_axes = _default_floor_axes(axes, columns, location)
     floor_axes = tuple(floor_axes)
     for axis in floor_axes:
         check_option("floor_axes", axis, list(axes))
@@ -246,15 +286,30 @@ def _read_position(nwb, name, floor_axes, position_units, path):
     if not np.isfinite(xy).any():
         raise RecordingError(f"`position` in {path} ({location}) is all NaN: no tracked "
                              f"sample to analyse")
+    span = np.nanmax(xy, axis=0) - np.nanmin(xy, axis=0)
+    if span.max() > LARGE_FLOOR_M:
+        warnings.warn(f"the position in {path} spans {span[0]:.3g} m x {span[1]:.3g} m, "
+                      f"larger than any rodent arena (its unit: {first.unit!r}, read as "
+                      f"{unit}): if it is in centimetres, pass position_units='cm' "
+                      f"(`--position-units cm` of `hippo-probe import-nwb`)", UserWarning,
+                      stacklevel=4)
     _check_plausible("position timestamps", time, MAX_TIME_S, "s", path)
     return time, xy, {"nwb_position": location, "nwb_floor_axes": list(floor_axes),
                       "nwb_position_units": unit}
 
 
-def _read_head_direction(nwb, name, floor_axes, sign, time, path):
-    _, _, CompassDirection, _ = _nwb_classes()
+def _read_head_direction(nwb, name, floor_axes, sign, units, time, path):
+    _, Position, CompassDirection, SpatialSeries = _nwb_classes()
     found = _containers(nwb, CompassDirection)
     if not found and name is None:
+        angles = [loc for loc, obj in _containers(nwb, SpatialSeries) if _is_angle(obj)]
+        angles += [f"{loc}/{k}" for loc, obj in _containers(nwb, Position)
+                   for k, series in obj.spatial_series.items() if _is_angle(series)]
+        if angles:      # said, as a lab that stored it so would otherwise not notice
+            warnings.warn(f"{path} has no CompassDirection, so no head direction is "
+                          f"imported; the series {angles} in an angle unit were not taken "
+                          f"as one (NWB keeps head direction in a CompassDirection)",
+                          UserWarning, stacklevel=4)
         return None, {}
     location, container = _pick(found, name if name is None or "/" in name else None,
                                 "CompassDirection data", path)
@@ -272,6 +327,8 @@ def _read_head_direction(nwb, name, floor_axes, sign, time, path):
     check_option("head_direction", key, list(axes))
     series = axes[key][0]
     declared = str(series.unit).strip().lower()
+    if units is not None:
+        declared = check_option("head_direction_units", units, ("rad", "deg"))
     scale = NWB_ANGLE_UNITS.get(declared)
     if scale is None:
         # taken as radians, said aloud: degrees read as radians would pass the
@@ -290,8 +347,17 @@ def _read_head_direction(nwb, name, floor_axes, sign, time, path):
         order = "".join(floor_axes) + "".join(vertical)
         sign = 1 if len(order) != 3 or order in ("xyz", "yzx", "zxy") else -1
     check_option("head_direction_sign", sign, (1, -1))
-    angle = _check_plausible("head_direction", _column(axes[key]) * scale * sign,
-                             MAX_ANGLE_RAD, "rad", path)
+    stored = _column(axes[key])
+    wraps = degrees_wrap(stored) if scale == 1.0 else None
+    if wraps is not None:
+        raise RecordingError(
+            f"the head direction in {path} ({location}/{key}) is read as radians (its unit: "
+            f"{series.unit!r}) but jumps by {abs(stored[wraps + 1] - stored[wraps]):.0f} "
+            f"between samples {wraps} and {wraps + 1} (from {stored[wraps]:.4g} to "
+            f"{stored[wraps + 1]:.4g}), as degrees wrapping at 360 do: it is in degrees; pass head_direction_units='deg' (`--head-direction-units deg` of "
+            f"`hippo-probe import-nwb`)")
+    angle = _check_plausible("head_direction", stored * scale * sign, MAX_ANGLE_RAD, "rad",
+                             path)
     hd_time = _check_plausible("head_direction timestamps", _timestamps(series), MAX_TIME_S,
                                "s", path)
     if hd_time.size != time.size or not np.allclose(hd_time, time, atol=1e-9, rtol=0):
@@ -401,7 +467,8 @@ def _assign_samples(time, ids, starts, stops, dt, config):
 
 def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_direction=None,
              head_direction_sign="auto", position=None, position_units=None,
-             environment=0, activity="auto", config=DEFAULTS):
+             head_direction_units=None, environment=0, activity="auto", units=None,
+             config=DEFAULTS):
     """Import an NWB session as a recording (needs pynwb).
 
     Position comes from a ``Position`` (or ``SpatialSeries``) under ``processing/*`` or
@@ -410,8 +477,10 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
     ``CompassDirection`` (by default the rotation about the vertical axis), with a sign
     chosen so that it is counter-clockwise from the first floor axis toward the second.
     Spike times of the ``Units`` table are binned onto the tracking samples
-    (:func:`~hippo_probe.recording.bin_spikes`: nearest sample within a trial's interval),
-    so the counts add up to the spikes inside the trials. Trials are the rows of the
+    (:func:`~hippo_probe.recording.bin_spikes`: nearest sample within a trial's interval,
+    no further than about half a sample interval from it), so the counts add up to the
+    spikes inside the trials, except those where the tracking skipped frames or paused,
+    which are left out and warned about. Trials are the rows of the
     file's trials table inside the epoch, or else the epoch's rows, intersected with the
     tracked time support ``[first, last tracking sample]``. ``Units`` columns (e.g.
     ``location``, renamed ``region``) become unit coords.
@@ -431,8 +500,11 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
     floor_axes : pair of str, optional
         Axes forming the floor, mapped to the recording's (x, y): names of 1-D series of
         the Position container (``("x", "z")``), or ``"x"``, ``"y"``, ``"z"`` for the
-        columns of a single 2-D series. Default: the two axes with the largest spread
-        (the vertical axis of a floor-bound animal barely moves).
+        columns of a single 2-D series (``"name[0]"``, ``"name[1]"`` for the columns of
+        one of several). Default: the two axes with the largest spread (the vertical axis
+        of a floor-bound animal barely moves), both from the container's 2-D series if it
+        has one (refused if it has several, e.g. two LEDs: name the columns), never from
+        a series in an angle unit.
     head_direction : str, optional
         Name of the CompassDirection series (or axis) to use; default: the only one, or
         ``"r" + vertical axis`` (e.g. ``"ry"`` when the floor is (x, z)).
@@ -445,6 +517,10 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
     position_units : {"m", "cm", "mm"}, optional
         Override the series' ``unit`` (used when the field is empty or wrong; an empty
         field is read as metres).
+    head_direction_units : {"rad", "deg"}, optional
+        Override the head direction's ``unit`` (used when the field is empty or wrong; an
+        empty field is read as radians, with a warning). An angle read as radians that
+        wraps at 360 is refused: degrees, whatever the file says.
     environment : int or str
         Environment id of every trial, or the name of an integer column of the trials
         table.
@@ -463,7 +539,19 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
     Raises
     ------
     RecordingError
-        Not an NWB file; no position; an unknown epoch; no tracking samples in the epoch.
+        Not an NWB file; no position; an unknown epoch; no tracking samples in the epoch;
+        several 2-D position series and no ``floor_axes``; a head direction read as
+        radians that wraps at 360 (degrees); units observed for only part of the
+        imported time (``obs_intervals``) and not left out by ``units``.
+
+    Warns
+    -----
+    UserWarning
+        Spikes that fall where the tracking paused; a tracked floor wider than 20 m
+        (centimetres under pynwb's default unit "meters"?); most spike times after the
+        end of everything else the file times (milliseconds?); angle series that are not
+        in a ``CompassDirection`` (not imported as head direction); a position or head
+        direction without a unit.
 
     Examples
     --------
@@ -492,8 +580,8 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
     with io:
         try:
             return _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction,
-                             head_direction_sign, position, position_units, environment,
-                             activity, config)
+                             head_direction_sign, head_direction_units, position,
+                             position_units, environment, activity, units, config)
         except (OSError, RuntimeError) as err:
             # h5py reads lazily: a damaged dataset surfaces here, as h5py's own errors
             if not _raised_in_h5py(err):
@@ -503,16 +591,19 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
 
 
 def _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction, head_direction_sign,
-              position, position_units, environment, activity, config):
+              head_direction_units, position, position_units, environment, activity, units,
+              config):
     epoch_rows = _epoch_rows(nwb, epoch, path)
     time, xy, attrs = _read_position(nwb, position, floor_axes, position_units, path)
     time = check_time(time, "position timestamps")
     hd, hd_attrs = _read_head_direction(nwb, head_direction, attrs["nwb_floor_axes"],
-                                        head_direction_sign, time, path)
+                                        head_direction_sign, head_direction_units, time,
+                                        path)
     attrs.update(hd_attrs)
     ids, starts, stops, from_trials = _trial_intervals(nwb, epoch_rows, trials,
                                                        _support(nwb, time))
     dt = float(np.median(np.diff(time)))
+    session_end = _session_end(nwb, time)
     index = _assign_samples(time, ids, starts, stops, dt, config)
     keep = index >= 0
     if not keep.any():
@@ -531,7 +622,7 @@ def _from_nwb(nwb, path, epoch, trials, floor_axes, head_direction, head_directi
     trial_env = _trial_environment(nwb, environment, ids, from_trials)
 
     values, unit_ids, unit_coords, kind = _read_activity(
-        nwb, activity, keep, time, index, starts, stops, path)
+        nwb, activity, keep, time, index, starts, stops, units, session_end, path)
     # a file written by to_nwb carries the recording's own attrs: restore them exactly
     attrs = _saved_attrs(nwb) or {
         "source": "animal", "activity_kind": kind,
@@ -580,21 +671,27 @@ def _trial_environment(nwb, environment, ids, from_trials):
         if column.dtype.kind not in "iu":
             raise RecordingError(f"`environment` column {environment!r} must hold integers; "
                                  f"got dtype {column.dtype}")
-        return column[np.searchsorted(table_ids, ids, sorter=np.argsort(table_ids))
-                      .clip(0, table_ids.size - 1)]
+        # the row of each trial id (ids need not be sorted in the table)
+        order = np.argsort(table_ids, kind="stable")
+        rows = order[np.searchsorted(table_ids, ids, sorter=order).clip(0, table_ids.size - 1)]
+        return column[rows]
     if from_trials and environment == 0 and nwb.trials is not None \
             and "environment" in nwb.trials.colnames:
         return _trial_environment(nwb, "environment", ids, from_trials)
     return np.full(ids.size, int(environment))
 
 
-def _read_activity(nwb, activity, keep, time, index, starts, stops, path):
+def _read_activity(nwb, activity, keep, time, index, starts, stops, chosen, session_end,
+                   path):
     module = nwb.processing.get(MODULE)
     series = module.data_interfaces.get("activity") if module is not None else None
     if activity == "series" or (activity == "auto" and series is not None):
         if series is None:
             raise RecordingError(f"`activity` is 'series' but the file has no "
                                  f"processing/{MODULE}/activity")
+        if chosen is not None:
+            raise ValueError("`units` selects rows of the Units table; this file's "
+                             "activity is a series (pass activity='units' to read spikes)")
         values = np.asarray(_read(series.data, f"`{series.name}.data`"))[keep].astype(
             np.float32)
         table = module.data_interfaces.get("unit_table")
@@ -622,7 +719,8 @@ def _read_activity(nwb, activity, keep, time, index, starts, stops, path):
                              f"{int(ends[-1])} of its {n_spikes} spike times: "
                              f"{n_spikes - int(ends[-1])} spikes belong to no unit; the "
                              f"file is damaged")
-    spikes = [np.asarray(units["spike_times"][i], dtype=float) for i in range(len(units))]
+    rows = _unit_rows(units, chosen)
+    spikes = [np.asarray(units["spike_times"][i], dtype=float) for i in rows]
     negative = sum(int((s < 0).sum()) for s in spikes)
     if negative:
         warnings.warn(f"{negative} spike times in {path} are negative (before the session's "
@@ -630,18 +728,87 @@ def _read_activity(nwb, activity, keep, time, index, starts, stops, path):
                       UserWarning, stacklevel=3)
     # a garbled spike time would fall outside every trial and vanish from the counts
     _check_plausible("spike_times", np.concatenate(spikes), MAX_TIME_S, "s", path)
+    _warn_spikes_beyond_session(nwb, spikes, session_end, path)
     values = bin_spikes(spikes, time, index, starts, stops)
+    _refuse_unobserved(units, rows, time, path)
     coords = {}
     for col in units.colnames:
         if col in _NOT_UNIT_COORDS:
             continue
-        column = list(units[col][:])
+        column = [units[col][i] for i in rows]
         if all(hasattr(v, "name") for v in column):        # e.g. electrode_group
             column = [v.name for v in column]
         column = np.asarray(column)
         if column.ndim == 1 and column.dtype.kind in "iufbUSO":
             coords["region" if col == "location" else col] = _text(column)
-    return values, np.asarray(units.id[:]), coords, "spike_count"
+    return values, np.asarray(units.id[:])[rows], coords, "spike_count"
+
+
+def _session_end(nwb, time) -> float:
+    """The latest time the file gives to anything but spikes: its tracking, epochs and
+    trials."""
+    ends = [time[-1]]
+    for table in (nwb.epochs, nwb.trials):
+        rows = _intervals(table)
+        if rows is not None:
+            ends.append(float(np.nanmax(rows[2])))
+    return float(max(ends))
+
+
+def _warn_spikes_beyond_session(nwb, spikes, end, path):
+    """Warn when most spike times come after everything else the file times: spike times
+    in milliseconds, or on another clock, would leave a few spikes for a plausible map."""
+    every = np.concatenate(spikes) if spikes else np.empty(0)
+    beyond = int((every > end).sum())
+    if every.size and beyond > BEYOND_SESSION_WARNING * every.size:
+        warnings.warn(f"{beyond} of the {every.size} spike times in {path} "
+                      f"({beyond / every.size:.0%}) come after the end of everything else "
+                      f"the file times ({end:.6g} s: tracking, epochs, trials; the latest "
+                      f"spike at {every.max():.6g} s): are the spike times in seconds, on "
+                      f"the session's clock? Those outside the trials are not counted",
+                      UserWarning, stacklevel=4)
+
+
+def _unit_rows(units, chosen):
+    """Rows of the Units table to import: all, or those of the ids ``chosen``."""
+    ids = np.asarray(units.id[:])
+    if chosen is None:
+        return np.arange(ids.size)
+    chosen = np.atleast_1d(np.asarray(chosen))
+    missing = [c.item() for c in chosen if c not in ids]
+    if missing or chosen.size == 0 or chosen.ndim != 1:
+        raise ValueError(f"`units` must be ids of the Units table ({ids.tolist()[:20]}"
+                         f"{' ...' if ids.size > 20 else ''}); got "
+                         f"{missing or chosen.tolist()}")
+    return np.array([int(np.flatnonzero(ids == c)[0]) for c in chosen])
+
+
+def _refuse_unobserved(units, rows, time, path):
+    """Refuse units whose ``obs_intervals`` leave imported samples unobserved: zero
+    counts there are not silence. Samples within one sample interval of an interval's
+    ends count as observed (the intervals' ends and the tracking clock need not agree)."""
+    if "obs_intervals" not in units.colnames or time.size < 2:
+        return
+    _check_size(units["obs_intervals"].target.data, "the Units table's `obs_intervals`")
+    slack = float(np.median(np.diff(time)))
+    short = {}
+    for i in rows:
+        spans = np.asarray(units["obs_intervals"][i], dtype=float).reshape(-1, 2)
+        seen = np.zeros(time.size, dtype=bool)
+        for a, b in spans:
+            seen |= (time >= a - slack) & (time <= b + slack)
+        if not seen.all():
+            short[int(units.id[i])] = seen.mean()
+    if short:
+        ids = list(short)
+        keep = [int(units.id[i]) for i in rows if int(units.id[i]) not in short]
+        shares = ", ".join(f"unit {u}: {v:.0%}" for u, v in list(short.items())[:5])
+        raise RecordingError(
+            f"units {ids[:10]}{' ...' if len(ids) > 10 else ''} in {path} were observed for "
+            f"only part of the imported time (their obs_intervals cover {shares}): their "
+            f"spike counts outside would read as silence. Import the others with "
+            f"units={keep[:10]}{' ...' if len(keep) > 10 else ''} (`--units` of "
+            f"`hippo-probe import-nwb`), or an epoch inside their observed time")
 
 
 def _text(values):

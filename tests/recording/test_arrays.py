@@ -21,6 +21,31 @@ def test_spikes_binned_on_nearest_sample_within_trials():
     np.testing.assert_array_equal(counts, [2, 1, 2, 1, 2])
 
 
+def test_spikes_in_a_gap_of_the_tracking_are_not_piled_onto_its_edges():
+    """A trial whose tracking pauses for 20 s: the samples beside the pause count only
+    their own ~dt of spikes (not the pause's), and the loss is said with the gap."""
+    time = np.r_[np.arange(100) * 0.1, 30 + np.arange(100) * 0.1]
+    trial = np.zeros(200, int)
+    spikes = [np.arange(0.005, time[-1], 0.01)]             # 100 Hz, everywhere
+    with pytest.warns(UserWarning, match=r"spikes inside the trials \(.*\) fall where the "
+                                         r"tracking has no sample.*longest 20\.1 s after "
+                                         r"t = 9\.9 s"):
+        counts = bin_spikes(spikes, time, trial, [0.0], [time[-1]])[:, 0]
+    # each sample stands for 0.1 s, 10 spikes, those beside the gap too (at most 10%
+    # more); all 2,000 spikes of the pause were on the two samples beside it before
+    assert counts.max() <= 11 and counts[98:102].tolist() == [10, 10, 10, 10]
+
+
+def test_jittered_samples_leave_no_spike_uncounted():
+    rng = np.random.default_rng(0)
+    time = np.cumsum(rng.uniform(0.095, 0.105, 1000))       # 5 % jitter of a 0.1 s clock
+    spikes = [np.sort(rng.uniform(time[0], time[-1], 5000))]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                       # no gap to warn about
+        counts = bin_spikes(spikes, time, np.zeros(1000, int), [time[0]], [time[-1]])
+    assert counts.sum() == 5000
+
+
 def test_from_arrays_spike_counts_add_up_and_units_convert():
     rng = np.random.default_rng(1)
     time = np.r_[np.arange(500) * 0.02, 20 + np.arange(300) * 0.02]

@@ -140,8 +140,9 @@ def _write_nwb(path, *, position=True, trials=None, spikes=(), unit="cm", hd_uni
         nwb.add_unit(spike_times=times)
     if trials is not None:
         nwb.add_trial_column("arena", "arena id")
-        for (a, b), env in trials:
-            nwb.add_trial(start_time=a, stop_time=b, arena=env)
+        for (a, b), env, *trial_id in trials:          # an id of its own, if given
+            nwb.add_trial(start_time=a, stop_time=b, arena=env,
+                          **({"id": trial_id[0]} if trial_id else {}))
     with pynwb.NWBHDF5IO(str(path), "w") as io:
         io.write(nwb)
     return t
@@ -166,11 +167,145 @@ def test_processing_behavior_conversion_units_and_touching_trials(tmp_path):
     assert int(rec.activity.sum()) == spikes[0].size          # every spike inside a trial
 
 
+def test_an_environment_column_follows_trial_ids_in_any_order(tmp_path):
+    """Trial ids need not be sorted in the table: trial 5 (first) in arena 1, trial 3 in
+    arena 2."""
+    _write_nwb(tmp_path / "s.nwb", trials=[((0.0, 4.0), 1, 5), ((5.0, 9.99), 2, 3)],
+               spikes=[np.array([1.0])])
+    rec = from_nwb(tmp_path / "s.nwb", epoch=None, environment="arena")
+    assert rec.trial_id.values.tolist() == [5, 3]
+    assert rec.trial_environment.values.tolist() == [1, 2]
+
+
+def _write_series(path, position=(), bare=(), spikes=(np.array([1.0]),)):
+    """A file whose Position holds the series ``position`` and whose behaviour module
+    holds the bare series ``bare``: each (name, data, unit), sampled at 100 Hz; one unit
+    for each array of ``spikes``."""
+    nwb = pynwb.NWBFile(session_description="synthetic", identifier="synthetic",
+                        session_start_time=datetime.datetime(2020, 1, 1,
+                                                             tzinfo=datetime.timezone.utc))
+    behavior = nwb.create_processing_module("behavior", "behaviour")
+
+    def series(name, data, unit):
+        return SpatialSeries(name=name, data=data, unit=unit, reference_frame="", rate=100.0)
+
+    if position:
+        behavior.add(Position(spatial_series=[series(*spec) for spec in position]))
+    for spec in bare:
+        behavior.add(series(*spec))
+    for times in spikes:
+        nwb.add_unit(spike_times=times)
+    with pynwb.NWBHDF5IO(str(path), "w") as io:
+        io.write(nwb)
+
+
+_T = np.arange(1000) * 0.01
+_XY = np.c_[0.5 + 0.4 * np.cos(_T), 0.5 + 0.2 * np.sin(_T)]       # a 1 m-wide loop
+_HD = np.mod(_T * 3, 2 * np.pi) - np.pi                             # spread ~1.8 rad
+
+
+def test_two_2d_series_are_not_paired_across_and_the_choice_is_asked_for(tmp_path):
+    """Two LEDs: the widest two columns are the two LEDs' x; pairing them would map x
+    against x. Refused, naming floor_axes; named, the LED's own columns are used."""
+    _write_series(tmp_path / "s.nwb", position=[("led_front", 2 * _XY, "meters"),
+                                                ("led_back", 2 * _XY + 0.01, "meters")])
+    with pytest.raises(RecordingError, match=r"holds several 2-D series \['led_back', "
+                                             r"'led_front'\].*floor_axes="):
+        from_nwb(tmp_path / "s.nwb", epoch=None)
+    rec = from_nwb(tmp_path / "s.nwb", epoch=None, floor_axes=("led_front[0]", "led_front[1]"))
+    samples = np.round(rec.time.values / 0.01).astype(int)
+    np.testing.assert_allclose(rec.position.values, 2 * _XY[samples])
+
+
+def test_a_head_direction_beside_the_position_is_not_a_floor_axis(tmp_path):
+    """Its spread (radians) is larger than the arena's (m): chosen by spread, it became
+    the x axis. A 2-D series gives the floor, whatever the unit of the angle."""
+    _write_series(tmp_path / "s.nwb", position=[("head_direction", _HD, "meters"),
+                                                ("position", _XY, "meters")])
+    rec = from_nwb(tmp_path / "s.nwb", epoch=None)
+    assert rec.attrs["nwb_floor_axes"] == ["position[0]", "position[1]"]
+
+
+def test_a_bare_angle_series_is_not_the_position_and_is_said_not_to_be_imported(tmp_path):
+    _write_series(tmp_path / "s.nwb", bare=[("head_direction", _HD, "radians"),
+                                            ("position", _XY, "meters")])
+    with pytest.warns(UserWarning, match=r"no CompassDirection, so no head direction is "
+                                         r"imported; the series \['processing/behavior/"
+                                         r"head_direction'\]"):
+        rec = from_nwb(tmp_path / "s.nwb", epoch=None)
+    assert rec.attrs["nwb_position"] == "processing/behavior/position"
+    assert "head_direction" not in rec
+
+
+def test_centimetres_under_the_default_metres_are_said_to_be_too_large(tmp_path):
+    """pynwb's SpatialSeries unit defaults to "meters": a lab's centimetres then read as
+    an 80 m arena."""
+    _write_series(tmp_path / "s.nwb", position=[("position", 100 * _XY, "meters")])
+    with pytest.warns(UserWarning, match=r"spans 80 m x 40 m, larger than any rodent arena "
+                                         r"\(its unit: 'meters', read as m\): if it is in "
+                                         r"centimetres, pass position_units='cm'"):
+        from_nwb(tmp_path / "s.nwb", epoch=None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rec = from_nwb(tmp_path / "s.nwb", epoch=None, position_units="cm")
+    np.testing.assert_allclose(rec.position.max("time").values, _XY.max(axis=0))
+
+
+def test_spike_times_in_milliseconds_are_said_to_come_after_the_session(tmp_path):
+    """Of 10 s of spikes in ms, only those of the first 10 ms fall inside the session:
+    a map from them looks like a sparse cell."""
+    _write_series(tmp_path / "s.nwb", position=[("position", _XY, "meters")],
+                  spikes=[np.arange(0.001, 9.99, 0.05) * 1000])
+    with pytest.warns(UserWarning, match=r"199 of the 200 spike times .* \(100%\) come after "
+                                         r"the end of everything else the file times "
+                                         r"\(9\.99 s.*are the spike times in seconds"):
+        from_nwb(tmp_path / "s.nwb", epoch=None)
+
+
+def test_a_unit_observed_for_part_of_the_time_is_refused_unless_left_out(tmp_path):
+    """Unit 1 was sorted only for the first half: its zero counts after would read as
+    silence (half its rate). Refused, naming the units to import instead."""
+    nwb = pynwb.NWBFile(session_description="synthetic", identifier="synthetic",
+                        session_start_time=datetime.datetime(2020, 1, 1,
+                                                             tzinfo=datetime.timezone.utc))
+    nwb.create_processing_module("behavior", "behaviour").add(Position(spatial_series=[
+        SpatialSeries(name="pos", data=_XY, unit="meters", reference_frame="", rate=100.0)]))
+    nwb.add_unit(spike_times=np.arange(0.05, 9.9, 0.1), obs_intervals=[[0.0, 10.0]])
+    nwb.add_unit(spike_times=np.arange(0.05, 5.0, 0.1), obs_intervals=[[0.0, 5.0]])
+    with pynwb.NWBHDF5IO(str(tmp_path / "s.nwb"), "w") as io:
+        io.write(nwb)
+    with pytest.raises(RecordingError, match=r"units \[1\] .* were observed for only part of "
+                                             r"the imported time .*unit 1: 50%.*units=\[0\]"):
+        from_nwb(tmp_path / "s.nwb", epoch=None)
+    rec = from_nwb(tmp_path / "s.nwb", epoch=None, units=[0])
+    assert rec.unit.values.tolist() == [0] and int(rec.activity.sum()) == 99
+    with pytest.raises(ValueError, match=r"`units` must be ids of the Units table \(\[0, 1\]\)"
+                                         r"; got \[7\]"):
+        from_nwb(tmp_path / "s.nwb", epoch=None, units=[0, 7])
+
+
 @pytest.mark.parametrize("hd_unit, said", [("gradians", "not an angle this reader knows"),
                                             ("", "no unit")])
 def test_an_unknown_head_direction_unit_is_taken_as_radians_aloud(tmp_path, hd_unit, said):
-    _write_nwb(tmp_path / "s.nwb", spikes=[np.array([0.5])], hd_unit=hd_unit)
-    with pytest.warns(UserWarning, match=f"head direction in .* has .*{said}.*taken as radians"):
+    """The file's angles are degrees: taken as radians (said), they wrap at 360, which
+    radians never do, so they are refused; named as degrees, they are read right."""
+    t = _write_nwb(tmp_path / "s.nwb", spikes=[np.array([0.5])], hd_unit=hd_unit)
+    with pytest.warns(UserWarning, match=f"head direction in .* has .*{said}.*taken as "
+                                         f"radians"), \
+            pytest.raises(RecordingError, match=r"read as radians .* but jumps by 359 "
+                                                r"between samples .*: it is in degrees; pass "
+                                                r"head_direction_units='deg'"):
+        from_nwb(tmp_path / "s.nwb", epoch=None)
+    rec = from_nwb(tmp_path / "s.nwb", epoch=None, head_direction_units="deg")
+    np.testing.assert_allclose(rec.head_direction.values,
+                               np.mod(t + np.pi / 2 + np.pi, 2 * np.pi) - np.pi, atol=1e-9)
+
+
+def test_degrees_labelled_radians_are_refused(tmp_path):
+    """R of a head-direction cell fell from 0.81 to 0.03 when its degrees were read as
+    the radians the file claimed."""
+    _write_nwb(tmp_path / "s.nwb", spikes=[np.array([0.5])], hd_unit="radians")
+    with pytest.raises(RecordingError, match=r"\(its unit: 'radians'\) but jumps by 359"):
         from_nwb(tmp_path / "s.nwb", epoch=None)
 
 

@@ -9,9 +9,9 @@ import numpy as np
 from .._angles import wrap_angle
 from .._validators import check_finite, check_option, check_real, check_shape
 from ..errors import RecordingError
+from .config import DEFAULTS
 from .layout import assemble, trial_blocks
 from .schema import annotate
-from .config import DEFAULTS
 from .validate import _v, check_activity_kind, validate
 
 #: Metres per unit of the position units ``from_arrays`` accepts.

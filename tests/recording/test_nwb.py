@@ -177,13 +177,13 @@ def test_an_environment_column_follows_trial_ids_in_any_order(tmp_path):
     assert rec.trial_environment.values.tolist() == [1, 2]
 
 
-def _write_series(path, position=(), bare=(), spikes=(np.array([1.0]),)):
+def _write_series(path, position=(), bare=(), spikes=None):
     """A file whose Position holds the series ``position`` and whose behaviour module
     holds the bare series ``bare``: each (name, data, unit), sampled at 100 Hz; one unit
     for each array of ``spikes``."""
     nwb = pynwb.NWBFile(session_description="synthetic", identifier="synthetic",
                         session_start_time=datetime.datetime(2020, 1, 1,
-                                                             tzinfo=datetime.timezone.utc))
+                                                             tzinfo=datetime.UTC))
     behavior = nwb.create_processing_module("behavior", "behaviour")
 
     def series(name, data, unit):
@@ -193,7 +193,7 @@ def _write_series(path, position=(), bare=(), spikes=(np.array([1.0]),)):
         behavior.add(Position(spatial_series=[series(*spec) for spec in position]))
     for spec in bare:
         behavior.add(series(*spec))
-    for times in spikes:
+    for times in [np.array([1.0])] if spikes is None else spikes:
         nwb.add_unit(spike_times=times)
     with pynwb.NWBHDF5IO(str(path), "w") as io:
         io.write(nwb)
@@ -267,7 +267,7 @@ def test_a_unit_observed_for_part_of_the_time_is_refused_unless_left_out(tmp_pat
     silence (half its rate). Refused, naming the units to import instead."""
     nwb = pynwb.NWBFile(session_description="synthetic", identifier="synthetic",
                         session_start_time=datetime.datetime(2020, 1, 1,
-                                                             tzinfo=datetime.timezone.utc))
+                                                             tzinfo=datetime.UTC))
     nwb.create_processing_module("behavior", "behaviour").add(Position(spatial_series=[
         SpatialSeries(name="pos", data=_XY, unit="meters", reference_frame="", rate=100.0)]))
     nwb.add_unit(spike_times=np.arange(0.05, 9.9, 0.1), obs_intervals=[[0.0, 10.0]])

@@ -306,9 +306,10 @@ def _read_head_direction(nwb, name, floor_axes, sign, units, time, path):
         angles += [f"{loc}/{k}" for loc, obj in _containers(nwb, Position)
                    for k, series in obj.spatial_series.items() if _is_angle(series)]
         if angles:      # said, as a lab that stored it so would otherwise not notice
+            verb = "was" if len(angles) == 1 else "were"
             warnings.warn(f"{path} has no CompassDirection, so no head direction is "
-                          f"imported; the series {angles} in an angle unit were not taken "
-                          f"as one (NWB keeps head direction in a CompassDirection)",
+                          f"imported; the series {angles}, in an angle unit, {verb} not "
+                          f"taken as one (NWB keeps head direction in a CompassDirection)",
                           UserWarning, stacklevel=4)
         return None, {}
     location, container = _pick(found, name if name is None or "/" in name else None,

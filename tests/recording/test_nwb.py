@@ -231,7 +231,7 @@ def test_a_bare_angle_series_is_not_the_position_and_is_said_not_to_be_imported(
                                             ("position", _XY, "meters")])
     with pytest.warns(UserWarning, match=r"no CompassDirection, so no head direction is "
                                          r"imported; the series \['processing/behavior/"
-                                         r"head_direction'\]"):
+                                         r"head_direction'\], in an angle unit, was not"):
         rec = from_nwb(tmp_path / "s.nwb", epoch=None)
     assert rec.attrs["nwb_position"] == "processing/behavior/position"
     assert "head_direction" not in rec

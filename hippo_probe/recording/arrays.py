@@ -39,11 +39,11 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop, *, reach=None)
     Sample ``i`` of a trial covers the part of the trial's interval ``[trial_start,
     trial_stop]`` nearer to ``time[i]`` than to any other sample of the trial: from the
     midpoint with the previous sample (or ``trial_start``) to the midpoint with the next
-    one (or ``trial_stop``, inclusive), but reaching no further than ``reach`` towards a
-    neighbour. Every analysis takes a sample to stand for one ``dt``, so spikes where the
-    tracking skipped frames or paused inside a trial (no position is known there) must
-    not be piled onto the samples around the gap. Spikes outside every trial are not
-    counted, nor those in a gap, which is warned about.
+    one (or ``trial_stop``, inclusive), but no further than ``reach`` from ``time[i]``.
+    Every analysis takes a sample to stand for one ``dt``, so spikes where no position is
+    known (the tracking paused or skipped frames, or started after the trial's start or
+    stopped before its end) must not be piled onto the samples beside them. Spikes
+    outside every trial are not counted, nor those in such a gap, which is warned about.
 
     Parameters
     ----------
@@ -87,12 +87,14 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop, *, reach=None)
     mid = (time[1:] + time[:-1]) / 2
     left = np.empty_like(time)
     right = np.empty_like(time)
-    # between two samples of a trial, an edge beyond reach leaves a hole: a gap in the
-    # tracking; a trial's own ends stay its interval's
-    left[1:] = np.maximum(mid, time[1:] - reach)
-    right[:-1] = np.minimum(mid, time[:-1] + reach)
+    left[1:], right[:-1] = mid, mid
     left[starts] = trial_start
     right[stops - 1] = trial_stop
+    # an edge beyond reach leaves a hole: a gap in the tracking, or the part of a trial's
+    # interval before its first sample or after its last (tracking started late, or
+    # stopped early)
+    left = np.maximum(left, time - reach)
+    right = np.minimum(right, time + reach)
     is_last = np.zeros(time.size, dtype=bool)
     is_last[stops - 1] = True
     counts = np.zeros((time.size, len(spike_times)), dtype=np.float32)
@@ -128,24 +130,51 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop, *, reach=None)
                       f"([{time[0]:.6g}, {time[-1]:.6g}] s): are `spike_times` in seconds "
                       f"on the same clock as `time`?", UserWarning, stacklevel=3)
     elif in_gaps:
-        _warn_gaps(time, trial, reach, in_gaps, n_in_trials)
+        _warn_gaps(time, trial, trial_start, trial_stop, reach, in_gaps, n_in_trials)
     return counts
 
 
-def _warn_gaps(time, trial, reach, in_gaps, n_in_trials):
-    """Say how many spikes fell in gaps of the tracking, and where the longest gap is."""
+def _warn_gaps(time, trial, trial_start, trial_stop, reach, in_gaps, n_in_trials):
+    """Say how many spikes fell where the tracking has no sample, and where: the longest
+    gap between samples, and the trials whose interval the samples do not reach."""
     step = np.diff(time)
     same = np.asarray(trial)[1:] == np.asarray(trial)[:-1]
     gaps = np.flatnonzero(same & (step > 2 * reach))
-    where = ""
+    where = []
     if gaps.size:
         g = gaps[np.argmax(step[gaps])]
-        where = (f"; {gaps.size} gaps between samples, the longest {step[g]:.3g} s "
-                 f"after t = {time[g]:.6g} s")
+        where.append(f"{gaps.size} gaps between samples, the longest {step[g]:.3g} s after "
+                     f"t = {time[g]:.6g} s")
+    starts, stops, _ = trial_blocks(trial)
+    short = (time[starts] - reach > trial_start) | (time[stops - 1] + reach < trial_stop)
+    if short.any():
+        k = int(np.flatnonzero(short)[0])
+        where.append(f"{int(short.sum())} trials whose samples do not reach their interval's "
+                     f"ends (e.g. [{trial_start[k]:.6g}, {trial_stop[k]:.6g}] s, sampled "
+                     f"from {time[starts[k]]:.6g} to {time[stops[k] - 1]:.6g} s)")
     warnings.warn(f"{in_gaps} of the {n_in_trials} spikes inside the trials "
                   f"({in_gaps / n_in_trials:.2%}) fall where the tracking has no sample "
-                  f"within {reach:.3g} s (skipped frames or a pause{where}): they are not "
-                  f"counted, as no position is known there", UserWarning, stacklevel=3)
+                  f"within {reach:.3g} s ({'; '.join(where) or 'irregular sampling'}): they "
+                  f"are not counted, as no position is known there", UserWarning,
+                  stacklevel=3)
+
+
+#: A tracked floor wider than this (m) is warned about: centimetres read as metres give
+#: arenas 100 times too large, and rodent arenas and tracks stay below it (the largest
+#: open fields are ~18 m across).
+LARGE_FLOOR_M = 20.0
+
+
+def warn_large_floor(xy, read_as, fix, stacklevel=3):
+    """Warn when positions ``xy`` (m) span more than :data:`LARGE_FLOOR_M`: ``read_as``
+    says how their unit was taken, ``fix`` how to give centimetres."""
+    if not np.isfinite(xy).any():
+        return
+    span = np.nanmax(xy, axis=0) - np.nanmin(xy, axis=0)
+    if span.max() > LARGE_FLOOR_M:
+        warnings.warn(f"the position spans {span[0]:.3g} m x {span[1]:.3g} m, larger than "
+                      f"any rodent arena ({read_as}): if it is in centimetres, {fix}",
+                      UserWarning, stacklevel=stacklevel + 1)
 
 
 #: Share of a unit's spikes beyond the samples' span above which ``from_arrays`` warns.
@@ -294,6 +323,8 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
     scale = LENGTH_UNITS[check_option("position_units", position_units, LENGTH_UNITS)]
     position = check_shape("position", check_real("position", position).astype(float), (n, 2))
     position = check_finite("position", position, allow_nan=True) * scale
+    warn_large_floor(position, f"read as {position_units}",
+                     "pass position_units='cm'")
 
     trial = np.zeros(n, dtype=int) if trial is None else np.asarray(trial)
     check_shape("trial", trial, (n,))
@@ -334,8 +365,19 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
         raise ValueError("give exactly one of `activity` and `spike_times`; got "
                          + ("both" if activity is not None else "neither"))
     if spike_times is not None:
+        if hasattr(spike_times, "keys"):
+            raise TypeError("`spike_times` must be a sequence of 1-D arrays, one per unit; "
+                            "got a mapping: pass list(d.values()) and unit=list(d)")
         if isinstance(spike_times, np.ndarray) and spike_times.dtype != object:
-            spike_times = [spike_times] if spike_times.ndim == 1 else list(spike_times)
+            if spike_times.ndim != 1:
+                # (time, unit id) pairs or one column of times would make a unit of each
+                # row: the shape cannot say which axis is the units
+                raise ValueError(
+                    f"`spike_times` must be a sequence of 1-D arrays, one per unit; got a "
+                    f"{spike_times.ndim}-D array of shape {spike_times.shape}: for (time, "
+                    f"unit id) pairs pass [times[ids == u] for u in np.unique(ids)], for "
+                    f"one unit per row list(array)")
+            spike_times = [spike_times]
         values = bin_spikes(spike_times, time, trial, table["trial_start"],
                             table["trial_stop"])
         _warn_spikes_beyond_samples(spike_times, time)

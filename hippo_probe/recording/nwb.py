@@ -20,7 +20,7 @@ from .._atomic import atomic_path
 from .._validators import check_bool, check_option, check_path
 from ..errors import RecordingError
 from .._angles import wrap_angle
-from .arrays import LENGTH_UNITS, bin_spikes, check_time, degrees_wrap
+from .arrays import LENGTH_UNITS, bin_spikes, check_time, degrees_wrap, warn_large_floor
 from .config import DEFAULTS
 from .layout import assemble, trial_blocks
 from .schema import annotate
@@ -86,10 +86,6 @@ def _pick(found, name, what, path):
 MAX_POSITION_M = 1e3
 MAX_TIME_S = 1e7
 MAX_ANGLE_RAD = 1e6      # unwrapped angles may hold many turns; not 1e6 radians of them
-#: A tracked floor wider than this (m) is warned about: centimetres stored under pynwb's
-#: default unit "meters" read 100 times too large, and rodent arenas and tracks stay
-#: below it (the largest open fields are ~18 m across).
-LARGE_FLOOR_M = 20.0
 #: Share of all spike times beyond the end of everything the file times (tracking,
 #: epochs, trials) above which the spike times are warned to be on another clock or in
 #: another unit (milliseconds keep a few of the first spikes of a session inside it).
@@ -286,13 +282,10 @@ def _read_position(nwb, name, floor_axes, position_units, path):
     if not np.isfinite(xy).any():
         raise RecordingError(f"`position` in {path} ({location}) is all NaN: no tracked "
                              f"sample to analyse")
-    span = np.nanmax(xy, axis=0) - np.nanmin(xy, axis=0)
-    if span.max() > LARGE_FLOOR_M:
-        warnings.warn(f"the position in {path} spans {span[0]:.3g} m x {span[1]:.3g} m, "
-                      f"larger than any rodent arena (its unit: {first.unit!r}, read as "
-                      f"{unit}): if it is in centimetres, pass position_units='cm' "
-                      f"(`--position-units cm` of `hippo-probe import-nwb`)", UserWarning,
-                      stacklevel=4)
+    # pynwb's SpatialSeries unit defaults to "meters", often left so for centimetres
+    warn_large_floor(xy, f"its unit in {path}: {first.unit!r}, read as {unit}",
+                     "pass position_units='cm' (`--position-units cm` of "
+                     "`hippo-probe import-nwb`)", stacklevel=4)
     _check_plausible("position timestamps", time, MAX_TIME_S, "s", path)
     return time, xy, {"nwb_position": location, "nwb_floor_axes": list(floor_axes),
                       "nwb_position_units": unit}
@@ -496,8 +489,8 @@ def from_nwb(path, epoch="wake", *, trials="auto", floor_axes=None, head_directi
     trials : "auto", bool
         Split the epoch by the file's trials table (``"auto"``: when there is one).
         Where two trials touch, the first samples of the later one are left out so that
-        trials are separated by one ``dt`` (the schema's gap); their spikes still count,
-        on the trial's first kept sample.
+        trials are separated by one ``dt`` (the schema's gap); their spikes are not
+        counted, as their positions are not kept.
     floor_axes : pair of str, optional
         Axes forming the floor, mapped to the recording's (x, y): names of 1-D series of
         the Position container (``("x", "z")``), or ``"x"``, ``"y"``, ``"z"`` for the

@@ -32,7 +32,7 @@ import numpy as np
 
 from .._validators import check_option
 from ..errors import RecordingError
-from .arrays import LENGTH_UNITS, _unit_ids, bin_spikes, from_arrays
+from .arrays import LENGTH_UNITS, _unit_ids, _warn_spikes_beyond_samples, bin_spikes, from_arrays
 from .config import DEFAULTS
 from .schema import SAMPLE_COORDS, TRIAL_TABLE, VARIABLES, annotate
 from .validate import _v, validate
@@ -372,6 +372,28 @@ def _sample_trials(time, starts, stops, ids):
     return k
 
 
+#: Share of the position's samples outside the spikes' ``time_support`` above which
+#: ``from_pynapple`` warns (pynapple's default support, first to last spike, leaves a
+#: little of a session's ends outside).
+OUTSIDE_SUPPORT_WARNING = 0.01
+
+
+def _warn_outside_support(support, time):
+    """Warn when many samples lie outside the TsGroup's time support: if the units were
+    not recorded there, their zero counts read as silence."""
+    s0, s1 = np.asarray(support.start, float), np.asarray(support.end, float)
+    k = np.searchsorted(s0, time, side="right") - 1
+    outside = ~((k >= 0) & (time <= s1[k.clip(0)]))
+    if outside.mean() > OUTSIDE_SUPPORT_WARNING:
+        first = time[np.flatnonzero(outside)[0]]
+        warnings.warn(f"{outside.mean():.0%} of the position's samples (the first at "
+                      f"{first:.6g} s) lie outside `activity.time_support` "
+                      f"({s0.size} intervals from {s0[0]:.6g} to {s1[-1]:.6g} s): if the "
+                      f"units were not recorded there, their zero counts read as silence; "
+                      f"restrict the position and trials to activity.time_support first",
+                      UserWarning, stacklevel=4)
+
+
 def _activity_values(nap, activity, time, trial_index, starts, stops, attrs, config):
     """(values (n, n_units), unit ids, unit coords, activity_kind) from a TsdFrame or
     TsGroup."""
@@ -385,11 +407,15 @@ def _activity_values(nap, activity, time, trial_index, starts, stops, attrs, con
         for name in _TSGROUP_COMPUTED:
             meta.pop(name, None)
         keys = np.asarray(activity.keys())
+        if keys.size == 0:
+            raise ValueError("`activity` must hold at least one unit; got an empty TsGroup")
         ids = meta.pop("unit") if "unit" in meta else keys
         spikes = [np.asarray(activity[k].t, dtype=float) for k in keys.tolist()]
         # the trial of each sample, by its interval; spikes outside every trial are not
         # counted (bin_spikes), as with from_arrays and from_nwb
         values = bin_spikes(spikes, time, trial_index, starts, stops)
+        _warn_spikes_beyond_samples(spikes, time)
+        _warn_outside_support(activity.time_support, time)
         return values, ids, meta, kind
     _check_same_clock("activity", activity.t, time, config)
     if activity.values.ndim != 2:
@@ -440,6 +466,26 @@ def _add_variables(nap, rec, variables, time, config):
                 raise ValueError(f"`{label}` must be 1-D; got shape {obj.values.shape}")
             rec[name] = "time", np.asarray(obj.values)
     return rec
+
+
+def _floor_columns(position):
+    """The position's two columns as (x, y): by name where they are x and y (any case),
+    else in order; a column named x or y never becomes the other axis."""
+    columns = [str(c) for c in position.columns]
+    if len(columns) != 2:
+        raise ValueError(f"`position` must have two columns (x, y); got {columns}; select "
+                         f"the floor axes first, e.g. position[['x', 'z']]")
+    names = [c.lower() for c in columns]
+    values = np.asarray(position.values, dtype=float)
+    if sorted(names) == ["x", "y"]:
+        return values[:, [names.index("x"), names.index("y")]]
+    for k, axis in enumerate("xy"):
+        if axis in names and names.index(axis) != k:
+            j = names.index(axis)
+            raise ValueError(f"`position` columns {columns}: the column {columns[j]!r} "
+                             f"would become the recording's {'xy'[j]}; give the floor axes "
+                             f"as (x, y), e.g. position[{columns[::-1]!r}]")
+    return values
 
 
 def from_pynapple(activity, position, head_direction=None, trials=None, time_support=None,
@@ -541,14 +587,7 @@ def from_pynapple(activity, position, head_direction=None, trials=None, time_sup
     time = np.asarray(position.t, dtype=float)
     if time.size == 0:
         raise ValueError("`position` must hold at least one sample; got none")
-    columns = [str(c) for c in position.columns]
-    if {"x", "y"} <= set(columns) and len(columns) == 2:
-        xy = np.asarray(position[["x", "y"]].values, dtype=float)
-    elif len(columns) == 2:
-        xy = np.asarray(position.values, dtype=float)
-    else:
-        raise ValueError(f"`position` must have two columns (x, y); got {columns}; select "
-                         f"the floor axes first, e.g. position[['x', 'z']]")
+    xy = _floor_columns(position)
     starts, stops, ids, env, start_position, trial_columns = _trial_table(
         nap, trials, time_support, position)
     index = _sample_trials(time, starts, stops, ids)

@@ -36,6 +36,18 @@ def test_spikes_in_a_gap_of_the_tracking_are_not_piled_onto_its_edges():
     assert counts.max() <= 11 and counts[98:102].tolist() == [10, 10, 10, 10]
 
 
+def test_spikes_of_a_trial_beyond_its_tracking_are_not_piled_onto_its_last_sample():
+    """The camera stopped at 10 s in a trial of 20 s: the 1,000 spikes after it all sat
+    on the last sample."""
+    time = np.arange(100) * 0.1 + 0.05
+    spikes = [np.arange(0.005, 20, 0.01)]                   # 100 Hz for the whole trial
+    with pytest.warns(UserWarning, match=r"1 trials whose samples do not reach their "
+                                         r"interval's ends \(e\.g\. \[0, 20\] s, sampled "
+                                         r"from 0\.05 to 9\.95 s\)"):
+        counts = bin_spikes(spikes, time, np.zeros(100, int), [0.0], [20.0])[:, 0]
+    assert counts.max() <= 11 and counts.sum() == pytest.approx(1000, abs=2)
+
+
 def test_jittered_samples_leave_no_spike_uncounted():
     rng = np.random.default_rng(0)
     time = np.cumsum(rng.uniform(0.095, 0.105, 1000))       # 5 % jitter of a 0.1 s clock
@@ -44,6 +56,33 @@ def test_jittered_samples_leave_no_spike_uncounted():
         warnings.simplefilter("error")                       # no gap to warn about
         counts = bin_spikes(spikes, time, np.zeros(1000, int), [time[0]], [time[-1]])
     assert counts.sum() == 5000
+
+
+PAIRS_REFUSED = (r"got a 2-D array of shape \(50, 2\): for \(time, unit id\) pairs")
+MAPPING_REFUSED = (r"got a mapping: pass list\(d.values\(\)\) and unit=list\(d\)")
+
+
+@pytest.mark.parametrize("spike_times, said", [
+    (np.c_[np.linspace(0, 9, 50), np.arange(50) % 2], PAIRS_REFUSED),
+    ({0: np.array([1.0]), 1: np.array([2.0])}, MAPPING_REFUSED),
+], ids=["time-unit pairs", "dict"])
+def test_spike_times_in_another_layout_are_refused(spike_times, said):
+    """(time, unit id) pairs made one unit of each spike (50 units)."""
+    time = np.arange(100) * 0.1
+    with pytest.raises((ValueError, TypeError), match=said):
+        from_arrays(time, np.zeros((100, 2)), spike_times=spike_times)
+
+
+def test_a_floor_of_centimetres_read_as_metres_is_warned_about():
+    time = np.arange(100) * 0.1
+    xy = np.c_[np.linspace(0, 80, 100), np.linspace(0, 60, 100)]       # an 80 x 60 cm box
+    with pytest.warns(UserWarning, match=r"spans 80 m x 60 m, larger than any rodent arena "
+                                         r"\(read as m\): if it is in centimetres, pass "
+                                         r"position_units='cm'"):
+        from_arrays(time, xy, activity=np.ones(100))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        from_arrays(time, xy, activity=np.ones(100), position_units="cm")
 
 
 def test_from_arrays_spike_counts_add_up_and_units_convert():

@@ -311,6 +311,39 @@ def test_bad_position_columns():
         from_pynapple(activity, xyz)
 
 
+@pytest.mark.parametrize("columns, refused", [
+    (["z", "x"], r"the column 'x' would become the recording's y.*\['x', 'z'\]"),
+    (["y", "z"], r"the column 'y' would become the recording's x.*\['z', 'y'\]")])
+def test_a_column_named_x_or_y_never_becomes_the_other_axis(columns, refused):
+    t, _, activity = _simple()
+    frame = nap.TsdFrame(t=t, d=np.c_[np.arange(20.0), -np.arange(20.0)], columns=columns)
+    with pytest.raises(ValueError, match=refused):
+        from_pynapple(activity, frame)
+
+
+def test_x_and_y_columns_are_found_in_any_case_and_order():
+    t, _, activity = _simple()
+    frame = nap.TsdFrame(t=t, d=np.c_[-np.arange(20.0), np.arange(20.0)], columns=["Y", "X"])
+    rec = from_pynapple(activity, frame)
+    np.testing.assert_array_equal(rec.position.sel(space="x").values, np.arange(20.0))
+
+
+def test_spikes_after_the_tracking_and_outside_their_support_are_said():
+    """Spike times in ms leave a few spikes inside a 20 s session; spikes recorded only
+    from 1 s read the first second of a 2 s session as silence."""
+    _, position, _ = _simple(200)                            # 0 to 19.9 s
+    in_ms = nap.TsGroup({0: nap.Ts(np.arange(0.01, 2.0, 0.02) * 1000)})
+    with pytest.warns(UserWarning, match=r"99 of the 100 spikes of unit index 0 fall before "
+                                         r"the first sample or after the last"):
+        from_pynapple(in_ms, position)
+    _, position, _ = _simple()
+    late = nap.TsGroup({0: nap.Ts(np.arange(1.01, 1.9, 0.1))},
+                       time_support=nap.IntervalSet(1.0, 1.9))
+    with pytest.warns(UserWarning, match=r"55% of the position's samples .* lie outside "
+                                         r"`activity.time_support`"):
+        from_pynapple(late, position)
+
+
 def test_bad_trials():
     _, position, activity = _simple()
     with pytest.raises(RecordingError, match="`position` has 10 samples outside every "

@@ -561,6 +561,33 @@ def test_an_argument_that_leaves_nothing_to_map_is_named(kw, words):
         hp.ratemaps(_session(), bin_size=0.1, **kw)
 
 
+def test_a_speed_that_is_unknown_is_not_called_slow():
+    """Trials of one sample have no speed: min_speed=0 said all were 'slower' than 0."""
+    n = 200
+    xy = np.c_[np.linspace(0, 1, n), np.linspace(0, 1, n) ** 2]
+    one_sample_trials = hp.from_arrays(np.arange(n) * 0.04, xy, activity=np.ones(n),
+                                       trial=np.arange(n), dt=0.02)
+    with pytest.raises(ValueError, match=re.escape(
+            "`min_speed` = 0.0 m/s leaves no sample to map: the speed of 200 of 200 is "
+            "unknown (trials of one sample")):
+        hp.ratemaps(one_sample_trials, bin_size=0.1, min_speed=0.0)
+
+
+def test_a_min_speed_above_the_default_max_speed_names_the_default():
+    with pytest.raises(ValueError, match=re.escape(
+            "`min_speed` must be < the default max_speed 0.5 m/s; got 10.0 (pass a larger "
+            "max_speed too)")):
+        hp.speed_score(_session(), min_speed=10, n_shuffles=0)
+
+
+def test_activity_beyond_float32_is_named_rather_than_called_inf():
+    with pytest.raises(ValueError, match=re.escape(
+            "`activity` must fit float32 (|value| <= 3.4e38), as the recording stores it; "
+            "found 1e+39 at index (3, 0)")):
+        hp.from_arrays(np.arange(10.0), np.zeros((10, 2)), activity=np.r_[np.ones(3), 1e39,
+                                                                        np.ones(6)])
+
+
 @pytest.mark.parametrize("kind, meant", [("spike_counts", "spike_count"), ("Rate", "rate"),
                                          ("lstm-hidden", "lstm_hidden")])
 def test_a_near_miss_of_a_known_activity_kind_is_refused(kind, meant):

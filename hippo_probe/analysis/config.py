@@ -149,7 +149,8 @@ class HeadDirectionConfig:
         long mean vector, whatever the cell does (a stuck or misread sensor visits one
         bin and gives R = 1). Half the circle. Sparse but spread headings (a few discrete
         directions, a coarsely quantised tracker) keep their R. Over half the circle an
-        untuned curve still reads R up to 2/pi; the shuffles' p-values account for it.
+        untuned curve still reads R up to 2/pi: ``attrs['untuned_length']`` gives it, and the
+        shuffles' p-values account for it.
     """
 
     n_bins: int = 60

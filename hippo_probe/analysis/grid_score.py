@@ -196,7 +196,7 @@ def _sweep(g, first, window):
     win_cnt = ccnt[:, window:] - ccnt[:, :-window]
     with np.errstate(invalid="ignore"):
         means = np.where(win_cnt == window, win_sum / window, -np.inf)
-        best = means.max(axis=1)
+        best = means.max(axis=1, initial=-np.inf)      # no window fits: the fallback
         fallback = np.where(ok.any(1), np.nansum(np.where(ok, g, 0), 1) / ok.sum(1), np.nan)
     return np.where(np.isfinite(best), best, fallback)
 

@@ -15,6 +15,14 @@ from .config import HEAD_DIRECTION
 from .ratemaps import smooth_normalized, tuning_sums, warn_nonfinite
 
 
+#: Fewest direction bins: 45 degree bins shorten R by 2.6% (sin(w/2)/(w/2)); two bins
+#: cannot place a preferred direction at all.
+MIN_DIRECTION_BINS = 8
+#: The untuned (flat-curve) mean vector length above which the coverage is warned about:
+#: about 8% of the circle unvisited.
+FLAT_LENGTH_WARNING = 0.05
+
+
 def direction_bins(hd, n_bins):
     """Bin of each head direction (radians, any range) in ``n_bins`` bins of [-pi, pi);
     -1 where NaN."""
@@ -73,6 +81,15 @@ def narrow_reason(arc):
             f"sensor?)")
 
 
+def flat_curve_length(arc):
+    """The mean vector length of a flat curve over the circle less an unvisited arc
+    (degrees): :math:`\sin(\pi f) / (\pi f)` with :math:`f` the visited fraction. An
+    untuned cell reads about this much; R must be judged against it (or by its p-value).
+    """
+    f = np.clip(1 - np.asarray(arc, dtype=float) / 360.0, 1e-12, 1.0)
+    return np.sinc(f)     # numpy's sinc is sin(pi x) / (pi x)
+
+
 def rayleigh_p(n, r):
     """Rayleigh test p-value for ``n`` independent angles with resultant length ``r``.
 
@@ -110,7 +127,13 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     ``HeadDirectionConfig.max_unvisited_arc`` (180 degrees) unvisited, every direction
     visited lies within a shorter arc and any curve has a long mean vector (a stuck
     sensor gives R = 1): the length, the preferred direction and the p-values are NaN
-    there, with the reason in ``attrs['nan_reasons']``.
+    there, with the reason in ``attrs['nan_reasons']``. Over a shorter unvisited arc
+    the length stands, but an untuned (flat) curve reads :math:`\sin(\pi f)/(\pi f)`
+    with :math:`f` the visited fraction of the circle (0.64 with half of it unvisited,
+    0.11 with a tenth): that is ``attrs['untuned_length']``, warned about above 0.05.
+
+    Bins of width :math:`w` shorten R by the factor :math:`\sin(w/2)/(w/2)` (0.9995 for
+    6 degrees); fewer than 8 bins are refused.
 
     Parameters
     ----------
@@ -158,7 +181,7 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     """
     rec = _common.check_recording(rec, ["activity", "head_direction"], why="head-direction tuning")
     n_bins = check_number("n_bins", HEAD_DIRECTION.n_bins if n_bins is None else n_bins,
-                          low=2, low_inclusive=True, integer=True)
+                          low=MIN_DIRECTION_BINS, low_inclusive=True, integer=True)
     sigma = check_number("sigma", sigma, low=0, low_inclusive=True)
     n_shuffles = _common.default_shuffles(n_shuffles, by, HEAD_DIRECTION.n_shuffles)
     dt = _common.sample_dt(rec)
@@ -192,6 +215,12 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     narrow = gap > HEAD_DIRECTION.max_unvisited_arc
     length[..., narrow] = np.nan
     phase[..., narrow] = np.nan
+    flat = flat_curve_length(np.where(narrow, 0.0, gap))
+    if flat.max() > FLAT_LENGTH_WARNING:
+        _common.warn(f"head direction left up to {gap[~narrow].max():.0f} degrees of the "
+                     f"circle unvisited: there a flat, untuned curve reads a mean vector "
+                     f"length of {flat.max():.2f}; judge R against that (attrs "
+                     f"'untuned_length') and by its p-value")
 
     squeeze = (lambda a: a[:, 0]) if dim is None else (lambda a: a)
     lead = ("unit",) if dim is None else ("unit", dim)
@@ -238,7 +267,8 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
         "head_direction_tuning", rec, n_bins=n_bins, sigma=sigma, sigma_units="bins",
         n_shuffles=n_shuffles, seed=_common.shuffle_seed(seed), by=by, min_speed=min_speed,
         rate_offset=why_offset, samples_without_direction=n_dir_nan,
-        mean_vector="from the occupancy-normalised curve (bin centres)", **notes)
+        mean_vector="from the occupancy-normalised curve (bin centres)",
+        untuned_length=float(flat.max()), **notes)
     group_gap = np.broadcast_to(gap, length.shape[1:]).ravel()
     reasons = ["no visited direction bin" if not np.isfinite(c).any() else
                narrow_reason(g) if g > HEAD_DIRECTION.max_unvisited_arc

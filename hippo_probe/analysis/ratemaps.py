@@ -153,10 +153,13 @@ def position_bins(rec, grid: Grid, *, min_speed=None, xy=None):
     dropped = {"position_nan": int(n_nan), "outside_extent": int(n_out)}
     if min_speed is not None:
         check_number("min_speed", min_speed, low=0, low_inclusive=True)
+        speed = _common.speed(rec)
+        unknown = np.isnan(speed)     # one-sample trials, or beside a NaN position
         with np.errstate(invalid="ignore"):
-            slow = ~(_common.speed(rec) >= min_speed)
+            slow = speed < min_speed
         dropped["below_min_speed"] = int((slow & (bins >= 0)).sum())
-        bins[slow] = -1
+        dropped["speed_unknown"] = int((unknown & (bins >= 0)).sum())
+        bins[slow | unknown] = -1
     return bins, dropped
 
 
@@ -225,6 +228,10 @@ def _nothing_to_map(dropped, n, min_speed, extent) -> str:
     k = dropped[cause]
     if cause == "below_min_speed":
         first = f"`min_speed` = {min_speed!r} m/s leaves no sample to map: {k} of {n} are slower"
+    elif cause == "speed_unknown":
+        first = (f"`min_speed` = {min_speed!r} m/s leaves no sample to map: the speed of {k} "
+                 f"of {n} is unknown (trials of one sample, or NaN positions beside them); "
+                 f"pass min_speed=None")
     elif cause == "outside_extent":
         where = f"`extent` = {extent!r}" if extent is not None else "the bins' extent"
         first = f"{where} leaves no sample to map: {k} of {n} positions lie outside it"

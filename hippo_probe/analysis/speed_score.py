@@ -212,6 +212,9 @@ def speed_score(rec, *, n_shuffles=None, seed=None, percentile=None, threshold=N
                          low_inclusive=True)
     min_speed = check_number("min_speed", SPEED.min_speed if min_speed is None
                              else min_speed, low=0, low_inclusive=True)
+    if max_speed is None and min_speed >= SPEED.max_speed:
+        raise ValueError(f"`min_speed` must be < the default max_speed {SPEED.max_speed} "
+                         f"m/s; got {min_speed} (pass a larger max_speed too)")
     max_speed = check_number("max_speed", SPEED.max_speed if max_speed is None
                              else max_speed, low=min_speed)
     r, slope, intercept, sums, valid = speed_arrays(

@@ -387,7 +387,13 @@ def from_arrays(time, position, activity=None, spike_times=None, head_direction=
         if activity.ndim == 1:
             activity = activity[:, None]
         check_shape("activity", activity, (n, None))
-        values = check_finite("activity", activity).astype(np.float32)
+        values = check_finite("activity", activity)
+        beyond = np.abs(values) > np.finfo(np.float32).max
+        if beyond.any():        # stored as float32: it would become inf
+            i = tuple(int(k) for k in np.argwhere(beyond)[0])
+            raise ValueError(f"`activity` must fit float32 (|value| <= 3.4e38), as the "
+                             f"recording stores it; found {values[i]:g} at index {i}")
+        values = values.astype(np.float32)
         attrs.setdefault("activity_kind", "rate")
     attrs.setdefault("source", "animal")
     check_activity_kind(attrs["activity_kind"])

@@ -78,6 +78,21 @@ def test_lazy_recording_gives_the_same_scores(grid_rec):
     xr.testing.assert_allclose(eager, lazy)
 
 
+def test_a_narrow_track_gives_no_score_and_the_reason_rather_than_a_crash():
+    """A 1 m x 5 cm track has room for no ring of peaks (the sweep over outer radii had
+    no window to average and failed inside numpy)."""
+    rng = np.random.default_rng(5)
+    n = 30000
+    x = np.abs((np.cumsum(rng.normal(0, 0.01, n)) % 2.0) - 1.0)      # 0..1 m, reflected
+    y = 0.025 + 0.02 * np.sin(np.arange(n) / 50)
+    rec = hp.from_arrays(np.arange(n) * 0.02, np.c_[x, y], activity_kind="spike_count",
+                         activity=rng.poisson(1, (n, 1)).astype(float))
+    with pytest.warns(hp.AnalysisWarning, match="grid score is NaN"):
+        res = hp.grid_score(rec, n_shuffles=0)
+    assert np.isnan(res.grid_score.item())
+    assert "no room for a ring of peaks" in str(res.attrs["nan_reasons"])
+
+
 def test_autocorrelogram_is_the_pearson_correlation_over_bins_visited_twice():
     rng = np.random.default_rng(0)
     m = rng.random((1, 9, 11))

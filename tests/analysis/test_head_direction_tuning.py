@@ -5,6 +5,7 @@ from scipy.special import i0, i1
 import hippo_probe as hp
 from hippo_probe.analysis import AnalysisWarning
 from hippo_probe.analysis.head_direction_tuning import rayleigh_p
+from hippo_probe.recording import from_arrays
 
 from .conftest import hd_cell_recording, make_recording, trajectory
 
@@ -104,8 +105,9 @@ def test_bad_input():
     nan_hd = rec.assign(head_direction=rec.head_direction * np.nan)
     with pytest.raises(ValueError, match="all NaN"):
         hp.head_direction_tuning(nan_hd)
-    with pytest.raises(ValueError, match="`n_bins` must be >= 2"):
-        hp.head_direction_tuning(rec, n_bins=1)
+    # two bins placed a cell tuned to 0 rad at 90 degrees with R 0.02 (60 bins: 0.70)
+    with pytest.raises(ValueError, match="`n_bins` must be >= 8; got 2"):
+        hp.head_direction_tuning(rec, n_bins=2)
     zero = rec.assign(activity=rec.activity * 0)
     with pytest.warns(AnalysisWarning, match="mean vector length is NaN"):
         res = hp.head_direction_tuning(zero, n_shuffles=0)
@@ -137,6 +139,21 @@ def test_the_coverage_rule_is_half_the_circle_unvisited(arc, kept):
     rec["head_direction"][:] = -np.pi + (rec.head_direction.values + np.pi) * span / (2 * np.pi)
     res = hp.head_direction_tuning(rec, n_shuffles=0)
     assert np.isfinite(res.mean_vector_length.values).all() == kept
+
+
+def test_an_untuned_cell_s_length_over_a_partly_visited_circle_is_given_and_warned():
+    """Half the circle visited: a flat 5 Hz cell read R = 0.64 (2 / pi) unflagged. The
+    length a flat curve has there comes with it, and a warning."""
+    rng = np.random.default_rng(0)
+    hd = np.abs(np.cumsum(rng.normal(0, 0.2, 20000)) % (2 * np.pi) - np.pi)   # [0, pi]
+    rec = from_arrays(np.arange(20000) * 0.02, np.zeros((20000, 2)),
+                      spike_times=[np.sort(rng.uniform(0, 400, 2000))], head_direction=hd)
+    with pytest.warns(AnalysisWarning, match=r"left up to 180 degrees of the circle "
+                                             r"unvisited: there a flat, untuned curve reads "
+                                             r"a mean vector length of 0\.64"):
+        res = hp.head_direction_tuning(rec, n_shuffles=0)
+    assert res.attrs["untuned_length"] == pytest.approx(2 / np.pi)
+    assert res.mean_vector_length.item() == pytest.approx(2 / np.pi, abs=0.05)
 
 
 def test_a_few_discrete_headings_over_the_circle_keep_their_length():

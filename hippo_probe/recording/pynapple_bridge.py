@@ -378,10 +378,15 @@ def _sample_trials(time, starts, stops, ids):
 OUTSIDE_SUPPORT_WARNING = 0.01
 
 
-def _warn_outside_support(support, time):
+def _warn_outside_support(support, time, spikes):
     """Warn when many samples lie outside the TsGroup's time support: if the units were
-    not recorded there, their zero counts read as silence."""
+    not recorded there, their zero counts read as silence. pynapple's default support
+    (each unit's first to last spike) says nothing about when they were recorded: only
+    a support given explicitly (bounds that are not spike times) is held against."""
     s0, s1 = np.asarray(support.start, float), np.asarray(support.end, float)
+    every = np.concatenate(spikes) if spikes else np.empty(0)
+    if np.isin(s0, every).all() and np.isin(s1, every).all():
+        return
     k = np.searchsorted(s0, time, side="right") - 1
     outside = ~((k >= 0) & (time <= s1[k.clip(0)]))
     if outside.mean() > OUTSIDE_SUPPORT_WARNING:
@@ -415,7 +420,7 @@ def _activity_values(nap, activity, time, trial_index, starts, stops, attrs, con
         # counted (bin_spikes), as with from_arrays and from_nwb
         values = bin_spikes(spikes, time, trial_index, starts, stops)
         _warn_spikes_beyond_samples(spikes, time)
-        _warn_outside_support(activity.time_support, time)
+        _warn_outside_support(activity.time_support, time, spikes)
         return values, ids, meta, kind
     _check_same_clock("activity", activity.t, time, config)
     if activity.values.ndim != 2:

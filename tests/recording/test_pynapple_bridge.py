@@ -15,6 +15,7 @@ Conventions compared here (pynapple 0.11, ``nap.compute_tuning_curves``; the old
 """
 
 import sys
+import warnings
 
 import numpy as np
 import pynapple as nap
@@ -342,6 +343,11 @@ def test_spikes_after_the_tracking_and_outside_their_support_are_said():
     with pytest.warns(UserWarning, match=r"55% of the position's samples .* lie outside "
                                          r"`activity.time_support`"):
         from_pynapple(late, position)
+    # pynapple's default support, first to last spike, says nothing of the recording
+    sparse = nap.TsGroup({0: nap.Ts(np.arange(1.01, 1.9, 0.1))})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        from_pynapple(sparse, position)
 
 
 def test_bad_trials():

@@ -83,7 +83,7 @@ def narrow_reason(arc):
 
 def flat_curve_length(arc):
     """The mean vector length of a flat curve over the circle less an unvisited arc
-    (degrees): :math:`\sin(\pi f) / (\pi f)` with :math:`f` the visited fraction. An
+    (degrees): :math:`\\sin(\\pi f) / (\\pi f)` with :math:`f` the visited fraction. An
     untuned cell reads about this much; R must be judged against it (or by its p-value).
     """
     f = np.clip(1 - np.asarray(arc, dtype=float) / 360.0, 1e-12, 1.0)
@@ -128,11 +128,11 @@ def head_direction_tuning(rec, *, n_bins=None, sigma=0.0, n_shuffles=None, seed=
     visited lies within a shorter arc and any curve has a long mean vector (a stuck
     sensor gives R = 1): the length, the preferred direction and the p-values are NaN
     there, with the reason in ``attrs['nan_reasons']``. Over a shorter unvisited arc
-    the length stands, but an untuned (flat) curve reads :math:`\sin(\pi f)/(\pi f)`
+    the length stands, but an untuned (flat) curve reads :math:`\\sin(\\pi f)/(\\pi f)`
     with :math:`f` the visited fraction of the circle (0.64 with half of it unvisited,
     0.11 with a tenth): that is ``attrs['untuned_length']``, warned about above 0.05.
 
-    Bins of width :math:`w` shorten R by the factor :math:`\sin(w/2)/(w/2)` (0.9995 for
+    Bins of width :math:`w` shorten R by the factor :math:`\\sin(w/2)/(w/2)` (0.9995 for
     6 degrees); fewer than 8 bins are refused.
 
     Parameters

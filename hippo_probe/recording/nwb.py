@@ -24,7 +24,7 @@ from .arrays import LENGTH_UNITS, bin_spikes, check_time, degrees_wrap, warn_lar
 from .config import DEFAULTS
 from .layout import assemble, trial_blocks
 from .schema import annotate
-from .validate import validate
+from .validate import check_text_variables, json_ready, validate
 
 #: NWB ``unit`` strings of lengths -> the keys of :data:`LENGTH_UNITS`.
 NWB_LENGTH_UNITS = {
@@ -44,6 +44,8 @@ MODULE = "hippo_probe"
 #: Intervals table of the tracked time support (pynapple's name for it).
 SUPPORT = "position_time_support"
 _ATTRS_NOTE = "hippo_probe recording attrs: "
+#: Ends the description of a unit-table column that holds bools as uint8.
+BOOL_NOTE = " (bool, as uint8)"
 
 
 def _nwb_classes():
@@ -689,8 +691,9 @@ def _read_activity(nwb, activity, keep, time, index, starts, stops, chosen, sess
         values = np.asarray(_read(series.data, f"`{series.name}.data`"))[keep].astype(
             np.float32)
         table = module.data_interfaces.get("unit_table")
-        coords = {} if table is None else {c: _text(table[c][:]) for c in table.colnames
-                                           if c != "unit"}
+        coords = {} if table is None else {
+            c: _text(table[c][:]).astype(bool) if table[c].description.endswith(BOOL_NOTE)
+            else _text(table[c][:]) for c in table.colnames if c != "unit"}
         ids = (np.arange(values.shape[1]) if table is None else _text(table["unit"][:]))
         kind = _saved_attrs(nwb).get("activity_kind", "rate")
         return values, ids, coords, kind
@@ -898,6 +901,7 @@ def to_nwb(rec, path, overwrite=False):
     from pynwb.epoch import TimeIntervals
 
     validate(rec)
+    check_text_variables(rec, "an NWB file")
     path = check_path("path", path)
     if path.is_dir():
         raise IsADirectoryError(f"`path` must name an .nwb file; got the directory {path}")
@@ -944,10 +948,11 @@ def to_nwb(rec, path, overwrite=False):
                                 unit=activity.attrs["units"],
                                 description=activity.attrs["long_name"]))
     unit_coords = [c for c, v in rec.coords.items() if v.dims == ("unit",)]
+    # HDF5 has no bool: a bool column is written as uint8 and said so in its description
     module.add(DynamicTable(name="unit_table", description="unit ids and unit coords",
-                            columns=[VectorData(name=c, description=c,
-                                                data=_nwb_column(rec[c].values))
-                                     for c in unit_coords]))
+                            columns=[VectorData(name=c, description=c + (
+                                BOOL_NOTE if rec[c].dtype == bool else ""),
+                                data=_nwb_column(rec[c].values)) for c in unit_coords]))
     standard = {"time", "trial", "environment", "trial_id", "trial_start",
                 "trial_stop", "trial_environment", "space", "activity", "position",
                 "head_direction", *unit_coords}
@@ -976,9 +981,8 @@ def to_nwb(rec, path, overwrite=False):
 
 
 def _plain(mapping):
-    """attrs with numpy scalars and arrays turned into JSON-ready Python values."""
-    return {k: (v.tolist() if isinstance(v, (np.generic, np.ndarray)) else v)
-            for k, v in mapping.items()}
+    """attrs with numpy scalars and arrays, at any depth, as JSON-ready Python values."""
+    return json_ready(dict(mapping))
 
 
 def _nwb_column(values):

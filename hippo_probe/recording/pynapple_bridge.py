@@ -117,8 +117,8 @@ def to_pynapple(rec, *, activity_as="auto"):
         ``"activity"``
             ``nap.TsdFrame`` (columns = unit ids, unit coords such as ``region`` as
             metadata: ``frame.region``) or ``nap.TsGroup`` (keys = unit ids when they
-            are integers, else ``0 .. n_units - 1`` with the ids in metadata ``unit``;
-            unit coords as metadata).
+            are increasing integers, else ``0 .. n_units - 1`` with the ids in metadata
+            ``unit``, as a TsGroup sorts its keys; unit coords as metadata).
         ``"position"``
             ``nap.TsdFrame`` with columns ``x``, ``y`` (m).
         ``"head_direction"``
@@ -227,7 +227,8 @@ def _activity_to_pynapple(nap, rec, time, support, activity_as):
     if activity_as != "tsgroup":
         return nap.TsdFrame(t=time, d=values, columns=ids.tolist(), time_support=support,
                             metadata=unit_coords or None)
-    if ids.dtype.kind in "iu":
+    # a TsGroup sorts its keys: ids that are not increasing go into metadata, in order
+    if ids.dtype.kind in "iu" and (np.diff(ids) > 0).all():
         keys, metadata = ids.tolist(), dict(unit_coords)
     else:
         keys, metadata = list(range(ids.size)), {"unit": ids, **unit_coords}
@@ -469,7 +470,11 @@ def _add_variables(nap, rec, variables, time, config):
         else:
             if np.asarray(obj.values).ndim != 1:
                 raise ValueError(f"`{label}` must be 1-D; got shape {obj.values.shape}")
-            rec[name] = "time", np.asarray(obj.values)
+            # a variable outside the schema: pynapple carries no units (annotate gives a
+            # schema variable its own)
+            rec[name] = "time", np.asarray(obj.values), ({} if name in VARIABLES else {
+                "units": "", "long_name": name.replace("_", " "),
+                "note": "units unknown: not carried by pynapple"})
     return rec
 
 

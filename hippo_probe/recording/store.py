@@ -23,7 +23,7 @@ from ..errors import RecordingError
 from .chunk_files import ChunkFiles
 from .config import COMPLETE_MARKER, DEFAULTS
 from .layout import is_trial_aligned, trial_aligned_chunks, trial_blocks
-from .validate import check_block, validate
+from .validate import check_block, check_text_variables, json_ready, validate
 
 # CF keys with which xarray changes values as it writes or reads them
 _CF_VALUE_CODING = frozenset({"scale_factor", "add_offset", "_Unsigned", "missing_value"})
@@ -92,6 +92,11 @@ def _prepare(rec, time_chunk):
     """Strings as variable-length strings; coords in memory; lazy data variables
     rechunked to the zarr chunks along time and checked block by block as computed."""
     rec = rec.drop_encoding()
+    # zarr writes top-level numpy scalars in attrs, not those inside lists and dicts
+    rec = rec.copy(deep=False)      # new variables: the caller's attrs stay as they are
+    rec.attrs = json_ready(dict(rec.attrs))
+    for var in rec.variables.values():
+        var.attrs = json_ready(dict(var.attrs))
     text = {name: var.astype(object) for name, var in rec.variables.items()
             if var.dtype.kind in "UST"}
     if text:
@@ -293,6 +298,7 @@ def save_recording(rec, path, overwrite=False, *, direct_io="auto", config=DEFAU
     overwrite = check_bool("overwrite", overwrite)
     _check_direct_io(direct_io)
     validate(rec)
+    check_text_variables(rec, "a store")
     if _is_url(path):
         _save_url(rec, path, overwrite, config, storage_options)
         return

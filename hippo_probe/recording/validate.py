@@ -128,6 +128,36 @@ def _check_attrs(rec):
                         f"{type(value).__name__} {_v(value)[:60]}")
 
 
+def json_ready(value):
+    """An attr value as plain Python, however deeply numpy scalars and arrays sit in its
+    lists and dicts (stores and NWB files keep attrs as JSON)."""
+    if isinstance(value, (np.generic, np.ndarray)):
+        return value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items()}
+    return value
+
+
+def check_text_variables(rec, what):
+    """Refuse a text (object) variable holding anything but strings: a missing label
+    (None, NaN) or a mixed type would be written as '' or 'nan' or the text of a number,
+    and read back as a label of its own."""
+    for name, var in rec.variables.items():
+        if var.dtype != object:
+            continue
+        flat = np.ravel(np.asarray(var.values))
+        odd = [k for k, v in enumerate(flat) if not isinstance(v, str)]
+        if odd:
+            k = odd[0]
+            raise RecordingError(
+                f"`{name}` holds {len(odd)} values that are not strings (first "
+                f"{flat[k]!r} at {k}) among its labels: {what} keeps text labels as strings "
+                f"only, so a missing label, or a value of another type, would come back as "
+                f"a label of its own; label them (e.g. 'unknown'), or give one type")
+
+
 def _storable(value) -> bool:
     if value is None or isinstance(value, (str, bool, int, float, np.bool_, np.number)):
         return True

@@ -11,8 +11,8 @@ from pynwb.behavior import CompassDirection, Position, SpatialSeries
 
 from hippo_probe.cli import main as cli
 from hippo_probe.errors import RecordingError
-from hippo_probe.recording import (from_nwb, open_recording, save_recording, to_nwb,
-                                   validate)
+from hippo_probe.recording import (from_arrays, from_nwb, open_recording, save_recording,
+                                   to_nwb, validate)
 
 from .conftest import NWB_PATH
 
@@ -398,3 +398,35 @@ def test_a_damaged_hdf5_file_is_a_recording_error_naming_it(tmp_path):
     path.write_bytes(bytes(data))
     with pytest.raises(RecordingError, match="tail.nwb"):
         from_nwb(path, epoch="wake")
+
+
+def test_unit_labels_survive_nwb_and_the_store_or_are_refused(tmp_path):
+    """A bool unit coord came back from NWB as uint8 (0/1 then select by position); a
+    missing text label came back as '' or 'nan', a label of its own."""
+    rng = np.random.default_rng(0)
+    t, xy = np.arange(200) * 0.02, rng.uniform(-0.3, 0.3, (200, 2))
+    good = from_arrays(t, xy, activity=rng.poisson(1, (200, 3)),
+                       unit={"unit": ["a", "b", "c"], "good": [True, False, True]})
+    to_nwb(good, tmp_path / "good.nwb")
+    back = from_nwb(tmp_path / "good.nwb")
+    assert back.good.dtype == bool
+    assert back.isel(unit=back.good.values).unit.values.tolist() == ["a", "c"]
+    gap = from_arrays(t, xy, activity=rng.poisson(1, (200, 3)),
+                      unit={"unit": [0, 1, 2], "region": np.array(["ca1", None, "adn"],
+                                                                  dtype=object)})
+    for write, what in ((lambda p: to_nwb(gap, p), "an NWB file"),
+                        (lambda p: save_recording(gap, p), "a store")):
+        with pytest.raises(RecordingError, match=rf"`region` holds 1 values that are not "
+                                                 rf"strings \(first nan at 1\).*{what} keeps "
+                                                 rf"text labels as strings only"):
+            write(tmp_path / "gap")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["good.nwb"]
+
+
+def test_numpy_values_inside_attrs_are_written_as_plain_values(tmp_path, wake):
+    rec = wake.assign_attrs(meta={"gain": np.float32(1.5), "ids": [np.int64(1)]})
+    save_recording(rec, tmp_path / "r.zarr")
+    to_nwb(rec, tmp_path / "r.nwb")
+    for back in (open_recording(tmp_path / "r.zarr"), from_nwb(tmp_path / "r.nwb")):
+        assert back.attrs["meta"] == {"gain": 1.5, "ids": [1]}
+    assert isinstance(rec.attrs["meta"]["gain"], np.float32)        # the caller's, as given

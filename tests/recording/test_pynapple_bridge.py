@@ -408,3 +408,25 @@ def test_missing_pynapple_names_the_install(monkeypatch):
         to_pynapple(rate_recording())
     with pytest.raises(ImportError, match="pip install"):
         from_pynapple(None, None)
+
+
+def test_a_variable_outside_the_schema_comes_back_from_pynapple():
+    """pynapple carries no attrs: an extra per-sample variable failed validation on the
+    way back ("lick has no units attr"); it comes back, its units said to be unknown."""
+    t, position, activity = _simple()
+    licks = nap.Tsd(t=t, d=np.arange(20) % 3)
+    rec = from_pynapple(activity, position, variables={"lick": licks})
+    np.testing.assert_array_equal(rec["lick"].values, np.arange(20) % 3)
+    assert rec["lick"].attrs["units"] == "" and "unknown" in rec["lick"].attrs["note"]
+    back = from_pynapple(**to_pynapple(rec))
+    np.testing.assert_array_equal(back["lick"].values, rec["lick"].values)
+
+
+def test_units_keep_their_order_through_a_tsgroup():
+    """A TsGroup sorts its keys: units 30, 10, 20 came back as 10, 20, 30."""
+    t = np.arange(200) * 0.02
+    rec = from_arrays(t, np.zeros((200, 2)), unit=[30, 10, 20],
+                      spike_times=[np.arange(k) * 0.03 for k in (5, 30, 90)])
+    back = from_pynapple(**to_pynapple(rec))
+    assert back.unit.values.tolist() == [30, 10, 20]
+    np.testing.assert_array_equal(back.activity.values, rec.activity.values)

@@ -260,8 +260,13 @@ def _variables_to_pynapple(nap, rec, time, support) -> dict:
         else:
             left_out.append(f"{name} {var.dims}")
     if left_out:
+        # the arena's outline sets the rate maps' extent: without it they take the
+        # positions', other bins, and other spatial information
+        arena = ("; a recording rebuilt from them has no arena outline, so its rate maps "
+                 "span the positions' extent instead of the arena's: other bins, other "
+                 "map statistics" if "arena_vertices" in rec.variables else "")
         warnings.warn(f"not carried to pynapple (no place for them in a time series): "
-                      f"{', '.join(left_out)}", UserWarning, stacklevel=3)
+                      f"{', '.join(left_out)}{arena}", UserWarning, stacklevel=3)
     return variables
 
 

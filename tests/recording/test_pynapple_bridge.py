@@ -150,7 +150,9 @@ def test_network_like_round_trip():
 def test_round_trip_of_every_per_sample_variable():
     """The fixture with every optional variable: what has no time axis is reported."""
     rec = make_network_recording()
-    with pytest.warns(UserWarning, match="not carried.*readout_weight.*arena_vertices"):
+    with pytest.warns(UserWarning, match="not carried.*readout_weight.*arena_vertices.*; a "
+                                         "recording rebuilt from them has no arena outline, "
+                                         "so its rate maps span the positions' extent"):
         data = to_pynapple(rec)
     assert set(data["variables"]) == {"estimate", "contact", "pf_cov", "class_probability"}
     back = from_pynapple(**data)

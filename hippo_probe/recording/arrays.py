@@ -79,9 +79,11 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop, *, reach=None)
     array([0., 1., 1., 0.], dtype=float32)
     """
     time = np.asarray(time, dtype=float)
+    trial = np.asarray(trial)
     starts, stops, _ = trial_blocks(trial)
+    same = trial[1:] == trial[:-1]          # consecutive samples of one trial
     if reach is None:
-        within = np.diff(time)[np.asarray(trial)[1:] == np.asarray(trial)[:-1]]
+        within = np.diff(time)[same]
         reach = (1 + DEFAULTS.gap_jitter) * float(np.median(within)) / 2 if within.size \
             else np.inf     # one sample a trial: its trial's interval is all it has
     mid = (time[1:] + time[:-1]) / 2
@@ -130,22 +132,23 @@ def bin_spikes(spike_times, time, trial, trial_start, trial_stop, *, reach=None)
                       f"([{time[0]:.6g}, {time[-1]:.6g}] s): are `spike_times` in seconds "
                       f"on the same clock as `time`?", UserWarning, stacklevel=3)
     elif in_gaps:
-        _warn_gaps(time, trial, trial_start, trial_stop, reach, in_gaps, n_in_trials)
+        _warn_gaps(time, same, starts, stops, trial_start, trial_stop, reach, in_gaps,
+                   n_in_trials)
     return counts
 
 
-def _warn_gaps(time, trial, trial_start, trial_stop, reach, in_gaps, n_in_trials):
+def _warn_gaps(time, same, starts, stops, trial_start, trial_stop, reach, in_gaps,
+               n_in_trials):
     """Say how many spikes fell where the tracking has no sample, and where: the longest
-    gap between samples, and the trials whose interval the samples do not reach."""
+    gap between samples of a trial (``same``: consecutive samples of one trial), and the
+    trials whose interval their samples (``starts``, ``stops``) do not reach."""
     step = np.diff(time)
-    same = np.asarray(trial)[1:] == np.asarray(trial)[:-1]
     gaps = np.flatnonzero(same & (step > 2 * reach))
     where = []
     if gaps.size:
         g = gaps[np.argmax(step[gaps])]
         where.append(f"{gaps.size} gaps between samples, the longest {step[g]:.3g} s after "
                      f"t = {time[g]:.6g} s")
-    starts, stops, _ = trial_blocks(trial)
     short = (time[starts] - reach > trial_start) | (time[stops - 1] + reach < trial_stop)
     if short.any():
         k = int(np.flatnonzero(short)[0])

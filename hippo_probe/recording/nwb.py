@@ -350,7 +350,8 @@ def _read_head_direction(nwb, name, floor_axes, sign, units, time, path):
             f"the head direction in {path} ({location}/{key}) is read as radians (its unit: "
             f"{series.unit!r}) but jumps by {abs(stored[wraps + 1] - stored[wraps]):.0f} "
             f"between samples {wraps} and {wraps + 1} (from {stored[wraps]:.4g} to "
-            f"{stored[wraps + 1]:.4g}), as degrees wrapping at 360 do: it is in degrees; pass head_direction_units='deg' (`--head-direction-units deg` of "
+            f"{stored[wraps + 1]:.4g}), as degrees wrapping at 360 do: it is in degrees; "
+            f"pass head_direction_units='deg' (`--head-direction-units deg` of "
             f"`hippo-probe import-nwb`)")
     angle = _check_plausible("head_direction", stored * scale * sign, MAX_ANGLE_RAD, "rad",
                              path)
@@ -725,7 +726,7 @@ def _read_activity(nwb, activity, keep, time, index, starts, stops, chosen, sess
                       UserWarning, stacklevel=3)
     # a garbled spike time would fall outside every trial and vanish from the counts
     _check_plausible("spike_times", np.concatenate(spikes), MAX_TIME_S, "s", path)
-    _warn_spikes_beyond_session(nwb, spikes, session_end, path)
+    _warn_spikes_beyond_session(spikes, session_end, path)
     values = bin_spikes(spikes, time, index, starts, stops)
     _refuse_unobserved(units, rows, time, path)
     coords = {}
@@ -752,7 +753,7 @@ def _session_end(nwb, time) -> float:
     return float(max(ends))
 
 
-def _warn_spikes_beyond_session(nwb, spikes, end, path):
+def _warn_spikes_beyond_session(spikes, end, path):
     """Warn when most spike times come after everything else the file times: spike times
     in milliseconds, or on another clock, would leave a few spikes for a plausible map."""
     every = np.concatenate(spikes) if spikes else np.empty(0)
@@ -908,7 +909,7 @@ def to_nwb(rec, path, overwrite=False):
     if path.exists() and not overwrite:
         raise FileExistsError(f"`path` already exists: {path}; pass overwrite=True to "
                               "replace it")
-    attrs = _plain(dict(rec.attrs))
+    attrs = json_ready(dict(rec.attrs))
     start_time = attrs.get("session_start_time")
     nwb = pynwb.NWBFile(
         session_description=f"hippo_probe recording ({attrs['source']}, "
@@ -961,12 +962,12 @@ def to_nwb(rec, path, overwrite=False):
         name="variable_attrs", description="attrs of the recording's variables",
         columns=[VectorData(name="variable", description="variable name", data=names),
                  VectorData(name="attrs", description="attrs as JSON",
-                            data=[json.dumps(_plain(dict(rec[n].attrs))) for n in names])]))
+                            data=[json.dumps(json_ready(dict(rec[n].attrs))) for n in names])]))
     for name, var in rec.variables.items():
         if name in standard:
             continue
         meta = json.dumps({"hippo_probe": 1, "dims": list(var.dims), "shape": var.shape,
-                           "attrs": _plain(dict(var.attrs)), "coord": name in rec.coords,
+                           "attrs": json_ready(dict(var.attrs)), "coord": name in rec.coords,
                            "dtype": "str" if var.dtype.kind in "UOT" else str(var.dtype)})
         data = _nwb_column(var.values)
         if var.dims[:1] == ("time",):
@@ -978,11 +979,6 @@ def to_nwb(rec, path, overwrite=False):
     with atomic_path(path, overwrite=overwrite, what="path") as tmp:
         with pynwb.NWBHDF5IO(str(tmp), "w") as io:
             io.write(nwb)
-
-
-def _plain(mapping):
-    """attrs with numpy scalars and arrays, at any depth, as JSON-ready Python values."""
-    return json_ready(dict(mapping))
 
 
 def _nwb_column(values):

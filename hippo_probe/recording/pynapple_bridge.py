@@ -349,8 +349,7 @@ def _trial_table(nap, trials, time_support, position):
         _check_type(nap, "time_support", time_support, ("IntervalSet",))
         s0 = np.asarray(time_support.start, float)
         s1 = np.asarray(time_support.end, float)
-        k = np.searchsorted(s0, starts, side="right") - 1
-        inside = (k >= 0) & (stops <= s1[k.clip(0)])
+        _, inside = _interval_of(starts, s0, s1, until=stops)
         if not inside.all():
             j = int(np.flatnonzero(~inside)[0])
             raise ValueError(f"`trials` must lie inside `time_support`; trial "
@@ -360,10 +359,16 @@ def _trial_table(nap, trials, time_support, position):
     return starts, stops, ids, env, start_position, extra
 
 
+def _interval_of(t, starts, stops, until=None):
+    """Index of the interval (sorted, closed, as in pynapple) holding each time ``t``, and
+    whether it does; with ``until``, whether ``[t, until]`` lies inside that interval."""
+    k = np.searchsorted(starts, t, side="right") - 1
+    return k, (k >= 0) & ((t if until is None else until) <= stops[k.clip(0)])
+
+
 def _sample_trials(time, starts, stops, ids):
     """Index of the trial holding each sample (intervals closed, as in pynapple)."""
-    k = np.searchsorted(starts, time, side="right") - 1
-    inside = (k >= 0) & (time <= stops[k.clip(0)])
+    k, inside = _interval_of(time, starts, stops)
     if not inside.all():
         i = int(np.flatnonzero(~inside)[0])
         raise RecordingError(
@@ -393,8 +398,7 @@ def _warn_outside_support(support, time, spikes):
     every = np.concatenate(spikes) if spikes else np.empty(0)
     if np.isin(s0, every).all() and np.isin(s1, every).all():
         return
-    k = np.searchsorted(s0, time, side="right") - 1
-    outside = ~((k >= 0) & (time <= s1[k.clip(0)]))
+    outside = ~_interval_of(time, s0, s1)[1]
     if outside.mean() > OUTSIDE_SUPPORT_WARNING:
         first = time[np.flatnonzero(outside)[0]]
         warnings.warn(f"{outside.mean():.0%} of the position's samples (the first at "
